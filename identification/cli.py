@@ -1,0 +1,114 @@
+"""Command-line interface: ``cleatfmu <command> ...``.
+
+Every user error (bad file, bad option value) ends with one line on stderr,
+``cleatfmu: error: <file>: <problem>``, and exit status 2; nothing is written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+
+from . import __version__
+from .errors import InputError
+from .examples import EXAMPLES, example_path
+from .identify import identify
+from .preprocess import DEFAULT_CUTOFF_HZ
+from .recording import TIRES, read_recording
+
+__all__ = ["main", "build_parser"]
+
+#: Modules that add a sub-command: each has ``add_parser(subparsers)``, which
+#: registers the command with ``set_defaults(func=...)``; ``func(args)``
+#: returns the exit status and raises InputError for user errors.
+_COMMAND_MODULES: list[str] = [".rig.command"]
+
+
+def _tire_list(values: list[str] | None) -> list[str] | None:
+    if not values:
+        return None
+    out: list[str] = []
+    for item in values:
+        for name in item.replace(",", " ").split():
+            if name not in TIRES:
+                raise InputError("--tire", f"unknown tire {name!r} (allowed: {', '.join(TIRES)})")
+            if name not in out:
+                out.append(name)
+    return out
+
+
+def _recording_arg(args):
+    if args.example is not None:
+        if args.recording is not None:
+            raise InputError("--example", "give either a recording or --example, not both")
+        return read_recording(example_path(args.example))
+    if args.recording is None:
+        raise InputError(None, "no recording given (a REC.csv path, or --example)")
+    return read_recording(args.recording)
+
+
+def format_table(rec, results) -> str:
+    """A Table-4-style text table (SI values shown in the paper's units)."""
+    head = (f"{'Tire':<5}{'T/s':>7}{'zeta':>7}{'delta':>7}{'wn/rad/s':>10}{'K/kN/m':>10}"
+            f"{'C/kNs/m':>9}{'R2':>6}{'peaks':>6}{'m/kg':>8}")
+    lines = [f"Recording {rec.source}: {rec.speed_kmh:.4g} km/h, {rec.sample_rate_hz:.6g} Hz, "
+             f"cleat {rec.cleat_height_m * 1e3:.4g} x {rec.cleat_width_m * 1e3:.4g} mm", head, "-" * len(head)]
+    for name, r in results.items():
+        lines.append(f"{name:<5}{r.T:>7.3f}{r.zeta:>7.3f}{r.delta:>7.3f}{r.omega_n:>10.2f}{r.k / 1e3:>10.2f}"
+                     f"{r.c / 1e3:>9.2f}{r.r2:>6.2f}{r.n_peaks:>6d}{r.mass:>8.1f}")
+    return "\n".join(lines)
+
+
+def cmd_identify(args) -> int:
+    rec = _recording_arg(args)
+    results = identify(rec, _tire_list(args.tire), cutoff_hz=args.cutoff_hz)
+    if args.json:
+        doc = {"recording": rec.source, "speed_kmh": rec.speed_kmh,
+               "tires": {name: r.to_json() for name, r in results.items()}}
+        print(json.dumps(doc, indent=2))
+    else:
+        print(format_table(rec, results))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="cleatfmu", description="Tire stiffness and damping from cleat tests, "
+                                     "exported as FMI 2.0 co-simulation FMUs.")
+    parser.add_argument("--version", action="version", version=f"cleatfmu {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("identify", help="identify tire stiffness k and damping c from a cleat recording",
+                       description="Identify k and c of each tire by the cleat-test paper's method "
+                                   "(logarithmic decrement for k, exponential fit through the first peak for c).")
+    p.add_argument("recording", nargs="?", help="recording NAME.csv (sidecar NAME.json beside it)")
+    p.add_argument("--example", nargs="?", const="7kmh", metavar="NAME",
+                   help=f"use an embedded recording instead ({', '.join(EXAMPLES)}; default 7kmh)")
+    p.add_argument("--tire", action="extend", nargs="+", metavar="TIRE",
+                   help="tire channel(s) to identify (FL FR RL RR; default: all in the recording)")
+    p.add_argument("--json", action="store_true", help="print JSON (SI units) instead of a table")
+    p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ,
+                   help="low-pass cut-off, Hz (default %(default)g; zero-phase 5th-order Butterworth)")
+    p.set_defaults(func=cmd_identify)
+    for module in _COMMAND_MODULES:
+        importlib.import_module(module, __package__).add_parser(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Run the CLI; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except InputError as exc:
+        print(f"cleatfmu: error: {exc.one_line()}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("cleatfmu: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,361 @@
+"""Cleat-test recordings: the ``cleat-recording/1`` format (read, validate, write).
+
+A recording is two files with the same stem:
+
+``NAME.csv``
+    Header ``time,<channels>``.  ``time`` in s, strictly increasing and
+    uniformly sampled: every step may differ from the nominal step
+    ``(t[-1] - t[0]) / (n - 1)`` by at most 1 % (:data:`JITTER_TOLERANCE`).
+    Channels are any non-empty subset of ``FL, FR, RL, RR`` (front/rear,
+    left/right): hub vertical acceleration in m/s², upward positive, gravity
+    excluded (AC-coupled accelerometers).  At least :data:`MIN_SAMPLES`
+    samples spanning :data:`MIN_DURATION_S`.
+
+``NAME.json``
+    ``{"format": "cleat-recording/1", "speed_kmh": float > 0,
+    "cleat_height_mm": float > 0, "cleat_width_mm": float > 0,
+    "wheelbase_m": float > 0, "wheel_load_kN": {"FL": float > 0, ...},
+    "description": str (optional)}``.  ``wheel_load_kN`` holds the static
+    wheel load of every channel (kN).  Unknown extra keys are kept and written
+    back unchanged.
+
+Inside the package every quantity is SI (m, s, N, kg); the file units above
+are converted at this boundary only.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from ._files import atomic_write_texts
+from .errors import InputError
+
+__all__ = [
+    "FORMAT", "TIRES", "FRONT_TIRES", "REAR_TIRES", "STANDARD_GRAVITY",
+    "JITTER_TOLERANCE", "MIN_SAMPLES", "MIN_DURATION_S",
+    "Recording", "read_recording", "write_recording", "format_recording", "sidecar_path",
+]
+
+FORMAT = "cleat-recording/1"
+TIRES = ("FL", "FR", "RL", "RR")
+FRONT_TIRES = ("FL", "FR")
+REAR_TIRES = ("RL", "RR")
+#: Standard gravity, m/s² (the paper's m = W/g).
+STANDARD_GRAVITY = 9.80665
+#: Largest accepted deviation of a time step from the nominal step (relative).
+JITTER_TOLERANCE = 0.01
+#: Shortest accepted record.
+MIN_SAMPLES = 100
+MIN_DURATION_S = 1.0
+
+_POSITIVE_KEYS = ("speed_kmh", "cleat_height_mm", "cleat_width_mm", "wheelbase_m")
+_KNOWN_KEYS = {"format", "description", "wheel_load_kN", *_POSITIVE_KEYS}
+
+
+@dataclass(frozen=True, eq=False)
+class Recording:
+    """One cleat-test run, in SI units.
+
+    Attributes
+    ----------
+    time_s : ndarray, shape (n,)
+        Sample times, s.
+    accel_m_s2 : dict of str to ndarray
+        Hub vertical acceleration per tire channel, m/s² (gravity excluded).
+    speed_m_s : float
+        Driving speed, m/s.
+    cleat_height_m, cleat_width_m : float
+        Cleat cross-section, m.
+    wheelbase_m : float
+        Distance front axle to rear axle, m.
+    wheel_load_N : dict of str to float
+        Static wheel load per channel, N.
+    description : str or None
+        Free text from the sidecar.
+    extra : dict
+        Unknown sidecar keys, kept verbatim.
+    source : str
+        Where the recording came from (path of the CSV, or a label).
+    """
+
+    time_s: np.ndarray
+    accel_m_s2: dict[str, np.ndarray]
+    speed_m_s: float
+    cleat_height_m: float
+    cleat_width_m: float
+    wheelbase_m: float
+    wheel_load_N: dict[str, float]
+    description: str | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+    source: str = "<memory>"
+
+    def __post_init__(self):
+        _check_time(self.source, np.asarray(self.time_s, dtype=float))
+        for name in self.accel_m_s2:
+            if name not in TIRES:
+                raise InputError(self.source, f"unknown channel {name!r} (allowed: {', '.join(TIRES)})")
+            if name not in self.wheel_load_N:
+                raise InputError(self.source, f"no wheel load for channel {name}")
+            if len(self.accel_m_s2[name]) != len(self.time_s):
+                raise InputError(self.source, f"channel {name} length differs from time")
+            if not np.all(np.isfinite(self.accel_m_s2[name])):
+                raise InputError(self.source, f"channel {name} holds non-finite values")
+        if not self.accel_m_s2:
+            raise InputError(self.source, "no acceleration channel")
+
+    @property
+    def tires(self) -> tuple[str, ...]:
+        """Channel names in file order."""
+        return tuple(self.accel_m_s2)
+
+    @property
+    def sample_rate_hz(self) -> float:
+        """Nominal sampling rate, Hz."""
+        t = self.time_s
+        return (len(t) - 1) / (t[-1] - t[0])
+
+    @property
+    def speed_kmh(self) -> float:
+        return self.speed_m_s * 3.6
+
+    def mass_kg(self, tire: str) -> float:
+        """Corner mass m = W/g of the paper, kg."""
+        return self.wheel_load_N[tire] / STANDARD_GRAVITY
+
+    def rear_axle_delay_s(self) -> float:
+        """Time between front and rear axle reaching the cleat, s (L / v)."""
+        return self.wheelbase_m / self.speed_m_s
+
+    def sidecar(self) -> dict[str, Any]:
+        """The ``NAME.json`` content (file units)."""
+        meta: dict[str, Any] = {
+            "format": FORMAT,
+            "speed_kmh": self.speed_m_s * 3.6,
+            "cleat_height_mm": self.cleat_height_m * 1e3,
+            "cleat_width_mm": self.cleat_width_m * 1e3,
+            "wheelbase_m": self.wheelbase_m,
+            "wheel_load_kN": {t: self.wheel_load_N[t] / 1e3 for t in self.tires},
+        }
+        if self.description is not None:
+            meta["description"] = self.description
+        meta.update(self.extra)
+        return meta
+
+
+def sidecar_path(csv_path: str | Path) -> Path:
+    """The metadata file that belongs to a recording CSV."""
+    return Path(csv_path).with_suffix(".json")
+
+
+# ----------------------------------------------------------------------------- reading
+
+def read_recording(csv_path: str | Path) -> Recording:
+    """Read and validate a ``cleat-recording/1`` recording.
+
+    Parameters
+    ----------
+    csv_path : path-like
+        The ``NAME.csv`` file; its sidecar ``NAME.json`` is found by stem.
+
+    Returns
+    -------
+    Recording
+
+    Raises
+    ------
+    InputError
+        For any violation of the format, naming the file and the problem.
+    """
+    csv_path = Path(csv_path)
+    if csv_path.suffix.lower() != ".csv":
+        raise InputError(csv_path, "expected a recording .csv file")
+    if not csv_path.is_file():
+        raise InputError(csv_path, "no such file")
+    meta_path = sidecar_path(csv_path)
+    if not meta_path.is_file():
+        raise InputError(csv_path, f"sidecar {meta_path.name} not found (a recording is NAME.csv + NAME.json)")
+    meta = _read_sidecar(meta_path)
+    names, data = _read_csv(csv_path)
+    loads = meta["wheel_load_kN"]
+    for name in names:
+        if name not in loads:
+            raise InputError(meta_path, f"wheel_load_kN has no entry for channel {name}")
+    return Recording(
+        time_s=data[:, 0].copy(),
+        accel_m_s2={n: data[:, i + 1].copy() for i, n in enumerate(names)},
+        speed_m_s=meta["speed_kmh"] / 3.6,
+        cleat_height_m=meta["cleat_height_mm"] / 1e3,
+        cleat_width_m=meta["cleat_width_mm"] / 1e3,
+        wheelbase_m=float(meta["wheelbase_m"]),
+        wheel_load_N={n: loads[n] * 1e3 for n in loads},
+        description=meta.get("description"),
+        extra={k: v for k, v in meta.items() if k not in _KNOWN_KEYS},
+        source=str(csv_path),
+    )
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _positive(path: Path, key: str, value: Any) -> float:
+    if not _is_number(value):
+        raise InputError(path, f"{key} must be a number, got {json.dumps(value)}")
+    if not math.isfinite(value) or value <= 0:
+        raise InputError(path, f"{key} must be a finite number > 0, got {value}")
+    return float(value)
+
+
+def _read_sidecar(path: Path) -> dict[str, Any]:
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise InputError(path, "not a UTF-8 text file") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(path, f"malformed JSON: {exc.msg} (line {exc.lineno}, column {exc.colno})") from None
+    if not isinstance(meta, dict):
+        raise InputError(path, "the sidecar must be a JSON object")
+    fmt = meta.get("format")
+    if fmt is None:
+        raise InputError(path, f"missing key 'format' (expected \"{FORMAT}\")")
+    if fmt != FORMAT:
+        raise InputError(path, f"unsupported format {json.dumps(fmt)} (expected \"{FORMAT}\")")
+    for key in _POSITIVE_KEYS:
+        if key not in meta:
+            raise InputError(path, f"missing key '{key}'")
+        meta[key] = _positive(path, key, meta[key])
+    loads = meta.get("wheel_load_kN")
+    if loads is None:
+        raise InputError(path, "missing key 'wheel_load_kN'")
+    if not isinstance(loads, dict) or not loads:
+        raise InputError(path, "wheel_load_kN must be an object such as {\"FL\": 11.46}")
+    for name, value in loads.items():
+        if name not in TIRES:
+            raise InputError(path, f"wheel_load_kN: unknown tire {name!r} (allowed: {', '.join(TIRES)})")
+        loads[name] = _positive(path, f"wheel_load_kN.{name}", value)
+    if "description" in meta and not isinstance(meta["description"], str):
+        raise InputError(path, "description must be a string")
+    return meta
+
+
+def _read_csv(path: Path) -> tuple[list[str], np.ndarray]:
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError:
+        raise InputError(path, "not a UTF-8 text file") from None
+    lines = text.splitlines()
+    if not lines or not lines[0].strip():
+        raise InputError(path, "empty file (expected a header 'time,<channels>')")
+    header = [h.strip() for h in lines[0].split(",")]
+    if header[0] != "time":
+        raise InputError(path, f"first column must be 'time', found {header[0]!r}")
+    names = header[1:]
+    if not names:
+        raise InputError(path, "no acceleration channel (expected some of FL, FR, RL, RR)")
+    for name in names:
+        if name not in TIRES:
+            raise InputError(path, f"unknown channel {name!r} (allowed: {', '.join(TIRES)})")
+    dupes = sorted({n for n in names if names.count(n) > 1})
+    if dupes:
+        raise InputError(path, f"duplicate channel {dupes[0]}")
+    numbered = [(i + 2, ln) for i, ln in enumerate(lines[1:]) if ln.strip()]
+    if len(numbered) < MIN_SAMPLES:
+        raise InputError(path, f"record too short: {len(numbered)} samples (at least {MIN_SAMPLES} needed)")
+    try:
+        data = np.loadtxt([ln for _, ln in numbered], delimiter=",", dtype=float, ndmin=2)
+        if data.shape[1] != len(header):
+            raise ValueError
+    except ValueError:
+        _locate_bad_cell(path, header, numbered)
+        raise InputError(path, "unreadable numeric data") from None  # pragma: no cover
+    if not np.all(np.isfinite(data)):
+        row, col = np.argwhere(~np.isfinite(data))[0]
+        raise InputError(path, f"line {numbered[row][0]}, column {header[col]}: non-finite value {data[row, col]}")
+    _check_time(path, data[:, 0], line_numbers=[n for n, _ in numbered])
+    return names, data
+
+
+def _locate_bad_cell(path: Path, header: list[str], numbered: list[tuple[int, str]]) -> None:
+    for lineno, line in numbered:
+        cells = line.split(",")
+        if len(cells) != len(header):
+            raise InputError(path, f"line {lineno}: expected {len(header)} cells, found {len(cells)}")
+        for name, cell in zip(header, cells):
+            try:
+                float(cell)
+            except ValueError:
+                raise InputError(path, f"line {lineno}, column {name}: {cell.strip()!r} is not a number") from None
+
+
+def _check_time(source, t: np.ndarray, line_numbers: list[int] | None = None) -> None:
+    def line(i: int) -> str:
+        return f"line {line_numbers[i]}" if line_numbers else f"sample {i}"
+
+    if t.ndim != 1 or len(t) < MIN_SAMPLES:
+        raise InputError(source, f"record too short: {len(t)} samples (at least {MIN_SAMPLES} needed)")
+    if not np.all(np.isfinite(t)):
+        raise InputError(source, "time holds non-finite values")
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0)
+    if bad.size:
+        i = bad[0] + 1
+        raise InputError(source, f"time is not strictly increasing at {line(i)} (t = {t[i]:g} s after {t[i - 1]:g} s)")
+    duration = t[-1] - t[0]
+    if duration < MIN_DURATION_S:
+        raise InputError(source, f"record too short: {duration:g} s (at least {MIN_DURATION_S:g} s needed)")
+    nominal = duration / (len(t) - 1)
+    dev = np.abs(dt - nominal) / nominal
+    worst = int(np.argmax(dev))
+    if dev[worst] > JITTER_TOLERANCE:
+        raise InputError(source, f"time is not uniformly sampled: step {dt[worst]:.6g} s at {line(worst + 1)} "
+                                 f"vs nominal {nominal:.6g} s (tolerance {JITTER_TOLERANCE:.0%})")
+
+
+# ----------------------------------------------------------------------------- writing
+
+def format_recording(rec: Recording, stem: str | Path, *, time_decimals: int = 6,
+                     value_decimals: int = 5) -> dict[Path, str]:
+    """The two files of a recording as ``{path: text}`` (nothing written).
+
+    Parameters
+    ----------
+    rec : Recording
+    stem : path-like
+        Output path without suffix (a ``.csv`` suffix is accepted and ignored).
+    time_decimals, value_decimals : int
+        Fixed-point decimals for time (s) and acceleration (m/s²).
+    """
+    stem = Path(stem)
+    if stem.suffix.lower() in (".csv", ".json"):
+        stem = stem.with_suffix("")
+    csv_path, meta_path = stem.with_name(stem.name + ".csv"), stem.with_name(stem.name + ".json")
+    if not stem.parent.is_dir():
+        raise InputError(stem.parent, "output directory does not exist")
+    written = np.round(rec.time_s, time_decimals)
+    nominal = (rec.time_s[-1] - rec.time_s[0]) / (len(rec.time_s) - 1)
+    if np.max(np.abs(np.diff(written) - nominal)) > JITTER_TOLERANCE * nominal / 2:
+        raise InputError(csv_path, f"{time_decimals} time decimals cannot represent the sampling step")
+    cols = [rec.time_s] + [rec.accel_m_s2[n] for n in rec.tires]
+    fmt = ",".join([f"%.{time_decimals}f"] + [f"%.{value_decimals}f"] * len(rec.tires))
+    body = "\n".join(fmt % row for row in zip(*cols))
+    return {csv_path: "time," + ",".join(rec.tires) + "\n" + body + "\n",
+            meta_path: json.dumps(rec.sidecar(), indent=2) + "\n"}
+
+
+def write_recording(rec: Recording, stem: str | Path, *, time_decimals: int = 6,
+                    value_decimals: int = 5) -> Path:
+    """Write ``STEM.csv`` and ``STEM.json``; return the CSV path.
+
+    Both files are written to temporary names first and renamed only when both
+    are complete, so a failure leaves nothing half-written.  See
+    :func:`format_recording` for the arguments.
+    """
+    files = format_recording(rec, stem, time_decimals=time_decimals, value_decimals=value_decimals)
+    atomic_write_texts(files)
+    return next(iter(files))

@@ -1,0 +1,149 @@
+"""Parameters of the virtual cleat-test rig, declared in one table.
+
+Every value has a flat key (``--param key=value`` on the command line), a
+default taken from the cleat-test paper (Tables 1, 2 and 4) where the paper
+gives one, a unit and a description.  Units are part of the key names; the
+only non-SI input is the speed in km/h, as on the test track.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from ..errors import InputError
+
+__all__ = ["EFFECTS", "PARAMS", "Param", "resolve", "parse_assignments", "parse_effects", "describe"]
+
+TIRES = ("FL", "FR", "RL", "RR")
+
+#: Effect names, exactly as the pipeline's diagnosis names them.
+EFFECTS = ("enveloping", "lift_off", "axle_coupling", "nonlinear_stiffness", "friction_damping",
+           "periodic_disturbance")
+
+
+@dataclass(frozen=True)
+class Param:
+    default: Any
+    unit: str
+    description: str
+    check: str = "positive"  # positive | nonnegative | int>=0 | int>=1 | channels | any
+
+
+def _table() -> dict[str, Param]:
+    p: dict[str, Param] = {
+        "speed_kmh": Param(7.0, "km/h", "driving speed over the cleat"),
+        "duration_s": Param(5.0, "s", "length of the recording"),
+        "t0_s": Param(0.5, "s", "time the front axle's contact point reaches the cleat's leading edge"),
+        "cleat.height_m": Param(0.040, "m", "cleat height"),
+        "cleat.width_m": Param(0.100, "m", "cleat width in the driving direction"),
+        "cleat.stagger_m": Param(0.0, "m", "right-hand cleat placed this far beyond the left one", "nonnegative"),
+        "vehicle.wheelbase_m": Param(2.77, "m", "wheelbase"),
+        "vehicle.track_m": Param(1.90, "m", "track width (front and rear)"),
+        "vehicle.mass_kg": Param(5528.0, "kg", "total mass; must equal the sum of wheel loads / g within 1 %"),
+        "tire.front.diameter_m": Param(1.357, "m", "front tire overall diameter (380/85 R 28)"),
+        "tire.rear.diameter_m": Param(1.747, "m", "rear tire overall diameter (460/85 R 38)"),
+        "tire.front.lugs": Param(21, "-", "front tire lug bars per circumference (lug pitch = pi D / lugs)", "int>=1"),
+        "tire.rear.lugs": Param(23, "-", "rear tire lug bars per circumference", "int>=1"),
+    }
+    loads = {"FL": 11460.0, "FR": 11600.0, "RL": 15650.0, "RR": 15510.0}
+    ks = {"FL": 550e3, "FR": 520e3, "RL": 420e3, "RR": 450e3}
+    cs = {"FL": 4200.0, "FR": 4300.0, "RL": 2400.0, "RR": 2500.0}
+    for t in TIRES:
+        p[f"tire.{t}.load_N"] = Param(loads[t], "N", f"static wheel load {t}")
+        p[f"tire.{t}.k_N_m"] = Param(ks[t], "N/m", f"tire vertical stiffness {t} (tangent at the static load)")
+        p[f"tire.{t}.c_Ns_m"] = Param(cs[t], "N s/m", f"tire viscous damping {t}", "nonnegative")
+    p.update({
+        "enveloping.footprint_front_m": Param(0.30, "m", "front footprint length (parabolic contact pressure)"),
+        "enveloping.footprint_rear_m": Param(0.38, "m", "rear footprint length"),
+        "axle_coupling.pitch_dynamic_index": Param(0.8, "-", "pitch inertia / (M a b); 1 decouples the axles"),
+        "axle_coupling.roll_gyration_m": Param(0.65, "m", "roll radius of gyration about the centre of gravity"),
+        "nonlinear_stiffness.exponent": Param(1.5, "-", "n in F = K delta^n (progressive for n > 1)"),
+        "friction_damping.force_N": Param(300.0, "N", "Coulomb friction force of the tire"),
+        "friction_damping.slip_velocity_m_s": Param(0.002, "m/s", "velocity scale of the tanh friction law"),
+        "periodic_disturbance.amplitude_m": Param(0.001, "m", "lug-passing road-equivalent amplitude"),
+        "periodic_disturbance.frequency_hz": Param(0.0, "Hz", "excitation frequency; 0: lug passing "
+                                                              "frequency speed / lug pitch of each axle",
+                                                   "nonnegative"),
+        "sensor.rate_hz": Param(1000.0, "Hz", "sampling rate"),
+        "sensor.aa_order": Param(4, "-", "anti-alias Butterworth order (0: no anti-alias filter)", "int>=0"),
+        "sensor.aa_cutoff_hz": Param(0.0, "Hz", "anti-alias cut-off; 0: a quarter of the sampling rate",
+                                     "nonnegative"),
+        "sensor.highpass_hz": Param(0.05, "Hz", "AC-coupling first-order high-pass corner (0: off)", "nonnegative"),
+        "sensor.noise_m_s2": Param(0.05, "m/s2", "white measurement noise RMS", "nonnegative"),
+        "sensor.lsb_m_s2": Param(0.0, "m/s2", "quantization step (0: none)", "nonnegative"),
+        "sensor.channels": Param("FL,FR,RL,RR", "-", "recorded channels", "channels"),
+        "solver.rtol": Param(1e-9, "-", "relative tolerance of the DOP853 integrator"),
+        "solver.oversample": Param(4, "-", "sensor-chain grid points per sample", "int>=1"),
+    })
+    return p
+
+
+PARAMS: dict[str, Param] = _table()
+
+
+def _coerce(key: str, value: Any) -> Any:
+    spec = PARAMS[key]
+    if spec.check == "channels":
+        names = [s.strip() for s in str(value).split(",") if s.strip()]
+        if not names or any(n not in TIRES for n in names) or len(set(names)) != len(names):
+            raise InputError("--param", f"{key} must be a comma-separated subset of FL,FR,RL,RR, got {value!r}")
+        return ",".join(names)
+    try:
+        num = float(value)
+    except (TypeError, ValueError):
+        raise InputError("--param", f"{key} must be a number, got {value!r}") from None
+    if not math.isfinite(num):
+        raise InputError("--param", f"{key} must be finite, got {value!r}")
+    if spec.check.startswith("int"):
+        if num != int(num) or num < int(spec.check[-1]):
+            raise InputError("--param", f"{key} must be an integer >= {spec.check[-1]}, got {value!r}")
+        return int(num)
+    if spec.check == "positive" and num <= 0:
+        raise InputError("--param", f"{key} must be > 0 {spec.unit}, got {value!r}")
+    if spec.check == "nonnegative" and num < 0:
+        raise InputError("--param", f"{key} must be >= 0 {spec.unit}, got {value!r}")
+    return num
+
+
+def resolve(overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Defaults updated with `overrides` (checked); unknown keys are refused."""
+    values = {k: v.default for k, v in PARAMS.items()}
+    for key, value in (overrides or {}).items():
+        if key not in PARAMS:
+            raise InputError("--param", f"unknown parameter {key!r} (cleatfmu rig --list-params shows them)")
+        values[key] = _coerce(key, value)
+    return values
+
+
+def parse_assignments(items: list[str] | None) -> dict[str, str]:
+    """``["key=value", ...]`` from the command line to a dict."""
+    out: dict[str, str] = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise InputError("--param", f"expected key=value, got {item!r}")
+        out[key.strip()] = value.strip()
+    return out
+
+
+def parse_effects(text: str | list[str] | None) -> tuple[str, ...]:
+    """``"enveloping,lift_off"`` (or a list of such) to a tuple of effect names."""
+    items = text if isinstance(text, list) else [text or ""]
+    names: list[str] = []
+    for item in items:
+        for name in (s.strip() for s in item.split(",")):
+            if not name or name == "none":
+                continue
+            if name not in EFFECTS:
+                raise InputError("--effect", f"unknown effect {name!r} (known: {', '.join(EFFECTS)})")
+            if name not in names:
+                names.append(name)
+    return tuple(names)
+
+
+def describe() -> str:
+    """The parameter table as text (``cleatfmu rig --list-params``)."""
+    rows = [f"{k:<38} {str(v.default):>12} {v.unit:<6} {v.description}" for k, v in PARAMS.items()]
+    return "\n".join(rows)

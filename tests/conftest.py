@@ -1,0 +1,86 @@
+"""Shared helpers: analytic cleat recordings and an in-process CLI runner."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from identification.cli import main
+from identification.recording import STANDARD_GRAVITY, Recording, write_recording
+
+#: Table 2 of the cleat-test paper: static wheel loads, N.
+LOADS_N = {"FL": 11460.0, "FR": 11600.0, "RL": 15650.0, "RR": 15510.0}
+
+
+def damped_sine(t, t_start, omega_n, zeta, amplitude=15.0):
+    """A(t) = A e^{-ζ ω_n τ} sin(ω_d τ) for τ = t - t_start ≥ 0, else 0."""
+    tau = t - t_start
+    wd = omega_n * np.sqrt(1 - zeta ** 2)
+    return np.where(tau >= 0, amplitude * np.exp(-zeta * omega_n * tau) * np.sin(wd * tau), 0.0)
+
+
+def analytic_recording(*, fs=1000.0, duration=5.0, speed_kmh=7.0, wheelbase=2.77, t0=0.5, noise=0.0,
+                       seed=0, modes=None, second_axle_impulse=False, tires=("FL", "FR", "RL", "RR")):
+    """Damped sinusoids starting at each axle's arrival (front t0, rear t0 + L/v).
+
+    `modes` maps tire -> (omega_n rad/s, zeta); default: the paper's FL/RL-like values.
+    With `second_axle_impulse`, every front channel also gets a decaying burst at
+    t0 + L/v, as the rear axle's impact seen through the body.
+    """
+    modes = modes or {"FL": (21.65, 0.08), "FR": (20.3, 0.09), "RL": (16.0, 0.05), "RR": (16.5, 0.045)}
+    v = speed_kmh / 3.6
+    t = np.arange(int(round(duration * fs))) / fs
+    rng = np.random.default_rng(seed)
+    accel = {}
+    for name in tires:
+        start = t0 if name[0] == "F" else t0 + wheelbase / v
+        a = damped_sine(t, start, *modes[name])
+        if second_axle_impulse and name[0] == "F":
+            a = a + damped_sine(t, t0 + wheelbase / v, 40.0, 0.2, amplitude=12.0)
+        accel[name] = a + noise * rng.standard_normal(t.size)
+    return Recording(time_s=t, accel_m_s2=accel, speed_m_s=v, cleat_height_m=0.04, cleat_width_m=0.1,
+                     wheelbase_m=wheelbase, wheel_load_N={n: LOADS_N[n] for n in tires})
+
+
+def true_k(tire, modes_value):
+    omega_n, _ = modes_value
+    return LOADS_N[tire] / STANDARD_GRAVITY * omega_n ** 2
+
+
+@dataclass
+class CliResult:
+    code: int
+    out: str
+    err: str
+
+
+@pytest.fixture
+def cli(capsys):
+    """Run ``cleatfmu ARGS`` in-process; returns exit code, stdout and stderr."""
+    def run(*args):
+        code = main([str(a) for a in args])
+        captured = capsys.readouterr()
+        return CliResult(code, captured.out, captured.err)
+    return run
+
+
+@pytest.fixture
+def good_recording(tmp_path) -> Path:
+    """A valid 4-channel analytic recording on disk; returns the CSV path."""
+    return write_recording(analytic_recording(noise=0.02), tmp_path / "run")
+
+
+def rewrite_sidecar(csv_path: Path, **changes) -> None:
+    """Modify the sidecar of a recording; a value None deletes the key."""
+    meta_path = csv_path.with_suffix(".json")
+    meta = json.loads(meta_path.read_text())
+    for key, value in changes.items():
+        if value is None:
+            meta.pop(key, None)
+        else:
+            meta[key] = value
+    meta_path.write_text(json.dumps(meta))
