@@ -23,7 +23,7 @@ __all__ = ["main", "build_parser"]
 #: Modules that add a sub-command: each has ``add_parser(subparsers)``, which
 #: registers the command with ``set_defaults(func=...)``; ``func(args)``
 #: returns the exit status and raises InputError for user errors.
-_COMMAND_MODULES: list[str] = [".rig.command"]
+_COMMAND_MODULES: list[str] = [".rig.command", ".export"]
 
 
 def _tire_list(values: list[str] | None) -> list[str] | None:
@@ -58,12 +58,22 @@ def format_table(rec, results) -> str:
     for name, r in results.items():
         lines.append(f"{name:<5}{r.T:>7.3f}{r.zeta:>7.3f}{r.delta:>7.3f}{r.omega_n:>10.2f}{r.k / 1e3:>10.2f}"
                      f"{r.c / 1e3:>9.2f}{r.r2:>6.2f}{r.n_peaks:>6d}{r.mass:>8.1f}")
+    cis = [(n, r) for n, r in results.items() if hasattr(r, "k_ci")]
+    if cis:
+        lines.append("95 % confidence intervals (waveform fit):")
+        for name, r in cis:
+            lines.append(f"{name:<5}K {r.k_ci[0] / 1e3:.2f} .. {r.k_ci[1] / 1e3:.2f} kN/m   "
+                         f"C {r.c_ci[0] / 1e3:.3f} .. {r.c_ci[1] / 1e3:.3f} kNs/m")
     return "\n".join(lines)
 
 
 def cmd_identify(args) -> int:
     rec = _recording_arg(args)
-    results = identify(rec, _tire_list(args.tire), cutoff_hz=args.cutoff_hz)
+    if args.method == "waveform":
+        from .waveform import identify_waveform_recording
+        results = identify_waveform_recording(rec, _tire_list(args.tire), cutoff_hz=args.cutoff_hz)
+    else:
+        results = identify(rec, _tire_list(args.tire), cutoff_hz=args.cutoff_hz)
     if args.json:
         doc = {"recording": rec.source, "speed_kmh": rec.speed_kmh,
                "tires": {name: r.to_json() for name, r in results.items()}}
@@ -87,6 +97,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"use an embedded recording instead ({', '.join(EXAMPLES)}; default 7kmh)")
     p.add_argument("--tire", action="extend", nargs="+", metavar="TIRE",
                    help="tire channel(s) to identify (FL FR RL RR; default: all in the recording)")
+    p.add_argument("--method", choices=("paper", "waveform"), default="paper",
+                   help="paper: log decrement (k) and exponential fit through the first peak (c); "
+                        "waveform: least-squares damped-sinusoid fit of the free decay, with 95%% "
+                        "confidence intervals (default: %(default)s)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units) instead of a table")
     p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ,
                    help="low-pass cut-off, Hz (default %(default)g; zero-phase 5th-order Butterworth)")

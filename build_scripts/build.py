@@ -1,0 +1,186 @@
+"""Build an FMU of one kind from ``fmu_src`` with given start values.
+
+Steps: stage the slave script, the kind's modules (copied from this project
+under their FMU-unique names) and the start-value file in a temporary folder;
+let pythonfmu build the FMU there (its import side effects on ``sys.path`` and
+``sys.modules`` are undone afterwards); complete the modelDescription.xml
+(:mod:`build_scripts.model_description`); write the FMU atomically.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+from importlib import metadata
+from pathlib import Path
+
+from .kinds import FmuKind, load_kind, module_source
+from .model_description import complete_model_description
+
+__all__ = ["build_fmu", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
+
+#: pythonfmu versions whose FMI wrapper the FMU-side workarounds
+#: (``fmu_src/pythonfmu_wrapper.py``) were written and tested for.
+VERIFIED_PYTHONFMU = ("0.7.0",)
+
+
+def project_version() -> str:
+    """Version of the installed cleatfmu distribution (``"unknown"`` if not installed)."""
+    try:
+        return metadata.version("cleatfmu")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
+def resolve_start_values(kind: FmuKind, overrides: dict | None = None) -> dict[str, float]:
+    """Start value of every input and parameter: the kind's defaults, then `overrides`.
+
+    A default given as a variable name copies that variable's (resolved) start.
+
+    Raises
+    ------
+    ValueError
+        For an override that is not an input or parameter, or not a finite number.
+    """
+    settable = {v.name for v in kind.variables if v.causality in ("input", "parameter")}
+    values = {v.name: v.start for v in kind.variables if v.name in settable}
+    for name, value in (overrides or {}).items():
+        if name not in settable:
+            raise ValueError(f"{name!r} is not an input or parameter of FMU kind {kind.name} "
+                             f"(settable: {', '.join(sorted(settable))})")
+        if isinstance(value, (bool, str)) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ValueError(f"start value of {name!r} must be a finite number, got {value!r}")
+        values[name] = float(value)
+    for name, value in values.items():
+        if isinstance(value, str):
+            values[name] = float(values[value])
+    return values
+
+
+@contextlib.contextmanager
+def _undo_import_side_effects(module_names):
+    """Restore sys.path and the kind's entries of sys.modules after pythonfmu's build."""
+    saved_path = list(sys.path)
+    saved_modules = {name: sys.modules.pop(name) for name in module_names if name in sys.modules}
+    try:
+        yield
+    finally:
+        sys.path[:] = saved_path
+        for name in module_names:
+            sys.modules.pop(name, None)
+        sys.modules.update(saved_modules)
+
+
+def _run_pythonfmu(kind: FmuKind, stage: Path, out_dir: Path, starts: dict, provenance: dict | None) -> Path:
+    import pythonfmu
+    from pythonfmu.builder import FmuBuilder
+
+    if pythonfmu.__version__ not in VERIFIED_PYTHONFMU:
+        raise ValueError(f"pythonfmu {pythonfmu.__version__} is installed; the FMUs' workarounds for its FMI "
+                         f"wrapper are verified for {', '.join(VERIFIED_PYTHONFMU)} only "
+                         f"(see fmu_src/pythonfmu_wrapper.py)")
+
+    script = stage / kind.script
+    script.write_bytes(kind.folder.joinpath(kind.script).read_bytes())
+    project_files = []
+    for filename in kind.files:
+        path = stage / filename
+        path.write_bytes(kind.folder.joinpath(filename).read_bytes())
+        project_files.append(path)
+    for name, dotted in sorted(kind.modules.items()):
+        path = stage / f"{name}.py"
+        path.write_bytes(module_source(dotted))
+        project_files.append(path)
+    start_file = stage / kind.start_file
+    start_file.write_text(json.dumps({"start": starts, "provenance": provenance or {}}, indent=2, sort_keys=True),
+                          encoding="utf-8")
+    project_files.append(start_file)
+    docs = None
+    if kind.folder.joinpath("README.md").is_file():
+        docs = stage / "documentation"
+        docs.mkdir()
+        (docs / "README.md").write_bytes(kind.folder.joinpath("README.md").read_bytes())
+    with _undo_import_side_effects(kind.module_names()):
+        try:
+            return Path(FmuBuilder.build_FMU(script, dest=out_dir, project_files=project_files,
+                                             documentation_folder=docs))
+        except (ValueError, TypeError) as exc:  # raised by the slave class on bad start values
+            raise ValueError(f"FMU kind {kind.name}: {exc}") from None
+
+
+def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: dict | None = None,
+              description: str | None = None) -> Path:
+    """Build an FMU of `kind` whose inputs and parameters start at `start_values`.
+
+    Parameters
+    ----------
+    kind : str
+        Folder name in ``fmu_src`` (e.g. ``"point_contact"``).
+    dest : path-like
+        The ``.fmu`` file to write.  It is written atomically: a temporary file
+        beside it, renamed at the end; nothing is left behind on failure.
+    start_values : dict of str to float, optional
+        Start values of inputs/parameters in SI units (others: the kind's defaults).
+    provenance : dict, optional
+        JSON-serialisable record of where the values come from, stored in the
+        FMU's start-value file.
+    description : str, optional
+        Model description (default: the slave class's own).
+
+    Returns
+    -------
+    Path
+        `dest`.
+
+    Raises
+    ------
+    ValueError
+        Unknown kind, bad start values (also those the slave itself rejects), or
+        a model description that does not match the kind's variable table.
+    """
+    dest = Path(dest)
+    if dest.suffix != ".fmu":
+        raise ValueError(f"{dest}: an FMU file name must end with .fmu")
+    if not dest.parent.is_dir():
+        raise ValueError(f"{dest.parent}: no such directory")
+    k = load_kind(kind)
+    starts = resolve_start_values(k, start_values)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=".fmu.part", dir=dest.parent)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        with tempfile.TemporaryDirectory(prefix="cleatfmu_build_") as work:
+            stage, out_dir = Path(work, "stage"), Path(work, "out")
+            stage.mkdir()
+            out_dir.mkdir()
+            raw = _run_pythonfmu(k, stage, out_dir, starts, provenance)
+            with zipfile.ZipFile(raw) as zin, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:
+                for info in zin.infolist():
+                    data = zin.read(info)
+                    if info.filename == "modelDescription.xml":
+                        data = _finish_xml(data, k, starts, description)
+                    zout.writestr(info.filename, data)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, dest)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return dest
+
+
+def _finish_xml(xml: bytes, kind: FmuKind, starts: dict, description: str | None) -> bytes:
+    written = ET.fromstring(xml)
+    version = project_version()
+    return complete_model_description(
+        xml, kind, start_values=starts,
+        description=description if description is not None else written.get("description", ""),
+        version=version,
+        generation_tool=f"cleatfmu {version} build_scripts ({written.get('generationTool', 'pythonfmu')})")

@@ -1,0 +1,173 @@
+"""``python -m build_scripts.check``: build and check every FMU kind in ``fmu_src``.
+
+For each kind, with the kind's default start values:
+
+1. build the FMU (:func:`build_scripts.build_fmu`);
+2. compliance: ``validate_fmu(fmu) == []`` and the checks of
+   :mod:`build_scripts.compliance` (units, descriptions, default experiment,
+   model structure, module names);
+3. simulate the default experiment with ``fmpy.simulate_fmu`` on the input
+   signals of the kind's reference CSV and compare every output with the
+   reference: ``|x - ref| <= atol + rtol |ref|`` with the kind's tolerances
+   (point_contact: rtol 1e-12, atol 1e-12 in the output's SI unit; booleans
+   exactly);
+4. run the same inputs in libcosimpy (Open Simulation Platform) and compare
+   with fmpy: the bare fmpy FMU2Slave loop must agree bit for bit, and both
+   with the reference within its tolerance;
+5. if the kind declares FMU-state support: get/set and serialize/deserialize
+   round trips must reproduce the outputs bit for bit.
+
+Across kinds, module names and model identifiers must be unique.  Exit status
+0 if everything passes, 1 otherwise (problems on stderr).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .build import build_fmu
+from .compliance import compliance_problems
+from .kinds import kind_names, load_kind, module_name_conflicts
+from .reference import read_reference
+from .runners import open_fmpy_slave, run_fmpy_loop, run_libcosim, simulate_fmpy, variable_refs
+
+__all__ = ["check_kind", "state_round_trip_problems", "compare", "main"]
+
+
+def compare(label: str, got: dict, ref: dict, names, rtol: float, atol: float, rows=slice(None)) -> list[str]:
+    """Problems where ``got[name]`` differs from ``ref[name][rows]`` beyond tolerance."""
+    problems = []
+    for name in names:
+        a, b = np.asarray(got[name]), np.asarray(ref[name])[rows]
+        if a.shape != b.shape:
+            problems.append(f"{label}: {name}: {a.shape[0]} samples, expected {b.shape[0]}")
+        elif a.dtype == bool or b.dtype == bool:
+            if not np.array_equal(a.astype(bool), b.astype(bool)):
+                problems.append(f"{label}: {name}: {int(np.sum(a != b))} samples differ")
+        else:
+            err = np.abs(a - b) - (atol + rtol * np.abs(b))
+            if not np.all(err <= 0.0):
+                i = int(np.argmax(err))
+                problems.append(f"{label}: {name}[{i}] = {a[i]!r}, expected {b[i]!r} (rtol {rtol}, atol {atol})")
+    return problems
+
+
+def state_round_trip_problems(fmu, signals: dict, outputs) -> list[str]:
+    """Get/set and serialize/deserialize the FMU state mid-run; outputs must repeat bit for bit."""
+    refs = variable_refs(fmu)
+    inputs = [n for n in signals if n != "time"]
+    in_vrs = [refs[n][0] for n in inputs]
+    reals = [refs[n][0] for n in outputs if refs[n][1] == "Real"]
+    t = np.asarray(signals["time"])
+    h = float(t[1] - t[0])
+    half = (t.size - 1) // 2
+
+    def run(slave, ks):
+        out = []
+        for k in ks:
+            slave.setReal(in_vrs, [float(signals[n][k]) for n in inputs])
+            slave.doStep(float(t[k]), h)
+            out.append(tuple(slave.getReal(reals)))
+        return out
+
+    problems = []
+    slave = open_fmpy_slave(fmu, instance_name="state")
+    try:
+        run(slave, range(half))
+        state = slave.getFMUstate()
+        first = run(slave, range(half, t.size - 1))
+        slave.setFMUstate(state)
+        if run(slave, range(half, t.size - 1)) != first:
+            problems.append("outputs after fmi2SetFMUstate differ from the first run")
+        blob = slave.serializeFMUstate(state)
+        slave.freeFMUstate(state)
+        other = open_fmpy_slave(fmu, instance_name="state_copy")
+        try:
+            copy = other.deSerializeFMUstate(blob)
+            other.setFMUstate(copy)
+            if run(other, range(half, t.size - 1)) != first:
+                problems.append("outputs after fmi2DeSerializeFMUstate in a new instance differ from the first run")
+            other.freeFMUstate(copy)
+            other.terminate()
+        finally:
+            other.freeInstance()
+        slave.terminate()
+    finally:
+        slave.freeInstance()
+    return problems
+
+
+def check_kind(kind: str, workdir: Path, log=print) -> list[str]:
+    """All checks of one kind (FMU built in `workdir`); returns the problems found."""
+    k = load_kind(kind)
+    t0 = time.perf_counter()
+    fmu = build_fmu(kind, workdir / f"{kind}.fmu")
+    log(f"{kind}: built {fmu.name} ({time.perf_counter() - t0:.1f} s)")
+    problems = [f"compliance: {p}" for p in compliance_problems(fmu)]
+    if problems:
+        return problems
+    log(f"{kind}: validate_fmu == [] and compliance checks pass")
+
+    ref = read_reference(kind)
+    outputs = k.names("output")
+    inputs = k.names("input")
+    missing = [n for n in ["time", *inputs, *outputs] if n not in ref]
+    if missing:
+        return [f"reference CSV lacks columns {missing}"]
+    from fmpy import read_model_description
+
+    de = read_model_description(str(fmu)).defaultExperiment
+    t = ref["time"]
+    grid = np.array([float(de.startTime) + i * float(de.stepSize) for i in range(t.size)])
+    if t[-1] != float(de.stopTime) or not np.array_equal(t, grid):
+        problems.append("reference time grid is not the default experiment's")
+    signals = {"time": t, **{n: ref[n] for n in inputs}}
+    sim = simulate_fmpy(fmu, signals, outputs, start_values={})
+    problems += compare("fmpy.simulate_fmu vs reference", sim, ref, ["time", *outputs],
+                        k.reference_rtol, k.reference_atol)
+    log(f"{kind}: default experiment simulated with fmpy ({t.size} samples) and compared with the reference")
+
+    loop = run_fmpy_loop(fmu, signals, outputs)
+    cosim = run_libcosim(fmu, signals, outputs)
+    problems += compare("libcosimpy vs fmpy loop", cosim, loop, outputs, 0.0, 0.0)
+    problems += compare("libcosimpy vs reference", cosim, ref, outputs, k.reference_rtol, k.reference_atol,
+                        rows=slice(1, None))
+    log(f"{kind}: run in libcosimpy and compared with fmpy")
+
+    if k.fmu_state:
+        problems += [f"FMU state: {p}" for p in state_round_trip_problems(fmu, signals, outputs)]
+        log(f"{kind}: FMU state get/set and serialize/deserialize round trips checked")
+    if not problems:
+        log(f"{kind}: OK")
+    return problems
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m build_scripts.check", description=__doc__.split("\n\n")[0])
+    parser.add_argument("kinds", nargs="*", help="kinds to check (default: all in fmu_src)")
+    args = parser.parse_args(argv)
+    kinds = args.kinds or kind_names()
+    if not kinds:
+        print("check: no FMU kinds found in fmu_src", file=sys.stderr)
+        return 1
+    failures = [f"module names: {p}" for p in module_name_conflicts([load_kind(k) for k in kind_names()])]
+    with tempfile.TemporaryDirectory(prefix="cleatfmu_check_") as tmp:
+        for kind in kinds:
+            try:
+                failures += [f"{kind}: {p}" for p in check_kind(kind, Path(tmp))]
+            except Exception as exc:  # a failing kind must not hide the others
+                failures.append(f"{kind}: {type(exc).__name__}: {exc}")
+    for problem in failures:
+        print(f"check: FAIL {problem}", file=sys.stderr)
+    print(f"check: {len(kinds)} FMU kind(s), {'all passed' if not failures else f'{len(failures)} problem(s)'}")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

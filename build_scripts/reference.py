@@ -1,0 +1,161 @@
+"""Reference results of the default experiments of the FMU kinds.
+
+Each kind's folder holds ``reference.csv``: the time grid of the FMU's
+``DefaultExperiment``, the input signals fed to it (columns named like the
+inputs) and the outputs that ``fmpy.simulate_fmu`` recorded for the FMU built
+with the kind's default start values (see :mod:`build_scripts.runners` for
+the alignment of inputs and outputs).  Floats are written with ``repr``
+(exact round trip), booleans as 0/1; lines starting with ``#`` are comments.
+
+``python -m build_scripts.reference KIND`` rewrites the file after an
+intended change of behaviour; before writing it checks the new result
+against the kind's closed-form law (:data:`CLOSED_FORM`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import math
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .build import build_fmu, resolve_start_values
+from .kinds import load_kind
+from .runners import simulate_fmpy
+
+__all__ = ["INPUT_SIGNALS", "CLOSED_FORM", "read_reference", "write_reference", "reference_signals",
+           "closed_form_outputs", "main"]
+
+
+def _point_contact_cleat_run(t: np.ndarray, starts: dict) -> dict:
+    """Prescribed hub and road motion of a tire rolling over a cleat (SI units).
+
+    Road: a (1 - cos) bump 0.05 m high, 0.1 m long, at 7 km/h, from 0.1 s.
+    Hub: at the static deflection of a 1500 kg corner mass on the kind's
+    stiffness until 0.1 s, then a damped oscillation (ζ = 0.15, amplitude
+    0.06 m, so that the tire lifts off) about it.
+    """
+    g, mass, speed = 9.80665, 1500.0, 7.0 / 3.6
+    k, r0 = starts["stiffness"], starts["unloaded_radius"]
+    height, length, t0 = 0.05, 0.1, 0.1
+    duration = length / speed
+    tau = t - t0
+    on = (tau >= 0.0) & (tau <= duration)
+    phase = 2.0 * math.pi * tau / duration
+    road_z = np.where(on, 0.5 * height * (1.0 - np.cos(phase)), 0.0)
+    road_vz = np.where(on, 0.5 * height * np.sin(phase) * 2.0 * math.pi / duration, 0.0)
+    wn, zeta, amp = math.sqrt(k / mass), 0.15, 0.06
+    wd = wn * math.sqrt(1.0 - zeta * zeta)
+    after = tau >= 0.0
+    decay = np.exp(-zeta * wn * np.where(after, tau, 0.0))
+    s, c = np.sin(wd * np.where(after, tau, 0.0)), np.cos(wd * np.where(after, tau, 0.0))
+    static = r0 - mass * g / k
+    hub_z = static + np.where(after, amp * decay * s, 0.0)
+    hub_vz = np.where(after, amp * decay * (wd * c - zeta * wn * s), 0.0)
+    return {"hub_z": hub_z, "hub_vz": hub_vz, "road_z": road_z, "road_vz": road_vz}
+
+
+def _point_contact_closed_form(inputs: dict, starts: dict) -> dict:
+    """F = k δ + c δ̇ with δ = r0 − (z_hub − z_road), δ̇ = ż_road − ż_hub; contact δ > 0."""
+    k, c, r0 = starts["stiffness"], starts["damping"], starts["unloaded_radius"]
+    deflection = r0 - (inputs["hub_z"] - inputs["road_z"])
+    rate = inputs["road_vz"] - inputs["hub_vz"]
+    return {"force_z": k * deflection + c * rate, "deflection": deflection, "deflection_rate": rate,
+            "in_contact": deflection > 0.0}
+
+
+#: kind -> function(t, start values) returning the input signals of its default experiment.
+INPUT_SIGNALS = {"point_contact": _point_contact_cleat_run}
+#: kind -> function(inputs, start values) returning its outputs in closed form.
+CLOSED_FORM = {"point_contact": _point_contact_closed_form}
+
+
+def reference_path(kind) -> Path:
+    """Path of the kind's reference CSV (a real file: package data of the installed project)."""
+    k = load_kind(kind)
+    return Path(str(k.folder.joinpath(k.reference_file)))
+
+
+def read_reference(kind) -> dict:
+    """The kind's reference result as ``{column: array}`` (booleans as bool arrays)."""
+    k = load_kind(kind)
+    text = k.folder.joinpath(k.reference_file).read_text(encoding="utf-8")
+    rows = [row for row in csv.reader(line for line in io.StringIO(text) if not line.startswith("#")) if row]
+    header, data = rows[0], rows[1:]
+    types = {v.name: v.type for v in k.variables}
+    out = {}
+    for j, name in enumerate(header):
+        column = [row[j] for row in data]
+        out[name] = (np.array([int(x) != 0 for x in column]) if types.get(name) == "Boolean"
+                     else np.array([float(x) for x in column]))
+    return out
+
+
+def write_reference(path, kind, result: dict, comment: str) -> None:
+    """Write `result` (``{column: array}``, time first) as a reference CSV."""
+    k = load_kind(kind)
+    types = {v.name: v.type for v in k.variables}
+    names = list(result)
+    buf = io.StringIO()
+    for line in comment.splitlines():
+        buf.write(f"# {line}\n")
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(names)
+    for i in range(len(result["time"])):
+        writer.writerow([str(int(bool(result[n][i]))) if types.get(n) == "Boolean" else repr(float(result[n][i]))
+                         for n in names])
+    Path(path).write_text(buf.getvalue(), encoding="utf-8")
+
+
+def reference_signals(kind, start_s: float, stop_s: float, step_s: float, starts: dict) -> dict:
+    """Time grid t_k = start + k h and the kind's input signals on it."""
+    n = int(round((stop_s - start_s) / step_s))
+    t = np.array([start_s + i * step_s for i in range(n + 1)])
+    return {"time": t, **INPUT_SIGNALS[kind](t, starts)}
+
+
+def closed_form_outputs(kind, signals: dict, starts: dict) -> dict:
+    """Outputs in closed form with fmpy's alignment: row 0 from inputs of row 0, row k from row k-1."""
+    names = [n for n in signals if n != "time"]
+    held = {n: np.concatenate([signals[n][:1], signals[n][:-1]]) for n in names}
+    return CLOSED_FORM[kind](held, starts)
+
+
+def main(argv=None) -> int:
+    """``python -m build_scripts.reference KIND``: rewrite the kind's reference result."""
+    parser = argparse.ArgumentParser(prog="python -m build_scripts.reference", description=main.__doc__)
+    parser.add_argument("kind")
+    args = parser.parse_args(argv)
+    from fmpy import read_model_description
+
+    k = load_kind(args.kind)
+    starts = resolve_start_values(k)
+    with tempfile.TemporaryDirectory(prefix="cleatfmu_ref_") as tmp:
+        fmu = build_fmu(args.kind, Path(tmp) / f"{args.kind}.fmu")
+        de = read_model_description(str(fmu)).defaultExperiment
+        signals = reference_signals(args.kind, float(de.startTime), float(de.stopTime), float(de.stepSize), starts)
+        outputs = k.names("output")
+        result = simulate_fmpy(fmu, signals, outputs)
+    expected = closed_form_outputs(args.kind, signals, starts)
+    for name in outputs:
+        if not np.allclose(result[name], expected[name], rtol=k.reference_rtol, atol=k.reference_atol):
+            print(f"{args.kind}: output {name} differs from the closed form; reference not written", file=sys.stderr)
+            return 1
+    path = reference_path(args.kind)
+    columns = {"time": result["time"], **{n: signals[n] for n in signals if n != "time"},
+               **{n: result[n] for n in outputs}}
+    write_reference(path, args.kind, columns,
+                    f"Reference result of the default experiment of FMU kind {args.kind} (fmpy.simulate_fmu),\n"
+                    f"built with the default start values; inputs as fed, outputs as recorded (SI units).\n"
+                    f"Regenerate: python -m build_scripts.reference {args.kind}")
+    print(f"wrote {path} ({len(result['time'])} rows)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

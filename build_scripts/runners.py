@@ -1,0 +1,184 @@
+"""Run an FMU on sampled input signals: fmpy (``simulate_fmu`` and a bare loop) and libcosimpy.
+
+Signals are dicts ``{name: 1-D array}`` on a uniform time grid ``t_k = start
++ k h`` (k = 0..N), key ``"time"`` included.  Semantics of the results:
+
+* :func:`simulate_fmpy` — ``fmpy.simulate_fmu`` with the inputs as an input
+  table: row 0 holds the outputs after initialisation (inputs of row 0);
+  row k ≥ 1 the outputs recorded at t_k after the step from t_{k-1}, during
+  which fmpy held the inputs of row k-1 (its co-simulation master applies
+  inputs at the start of each communication step).
+* :func:`run_fmpy_loop` and :func:`run_libcosim` — for k = 0..N-1: set the
+  inputs of row k, step from t_k to t_{k+1}, read the outputs; so their
+  row k equals row k+1 of :func:`simulate_fmpy`.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["simulate_fmpy", "run_fmpy_loop", "run_libcosim", "open_fmpy_slave", "variable_refs"]
+
+
+def variable_refs(fmu) -> dict[str, tuple[int, str]]:
+    """``{name: (value reference, type)}`` of every variable of `fmu`."""
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmu), validate=False)
+    return {v.name: (v.valueReference, v.type) for v in md.modelVariables}
+
+
+def _grid(signals):
+    t = np.asarray(signals["time"], dtype=float)
+    if t.size < 2:
+        raise ValueError("input signals need at least two samples")
+    return t, float(t[1] - t[0])
+
+
+def simulate_fmpy(fmu, signals: dict, outputs: list[str], *, start_values: dict | None = None) -> dict:
+    """``fmpy.simulate_fmu`` over the time grid of `signals`; returns ``{name: array}`` incl. time."""
+    from fmpy import simulate_fmu
+
+    t, h = _grid(signals)
+    names = [n for n in signals if n != "time"]
+    table = np.zeros(t.size, dtype=[("time", float)] + [(n, float) for n in names])
+    table["time"] = t
+    for n in names:
+        table[n] = signals[n]
+    res = simulate_fmu(str(fmu), start_time=float(t[0]), stop_time=float(t[-1]), step_size=h,
+                       output_interval=h, input=table, output=list(outputs),
+                       start_values=start_values or {})
+    return {name: np.array(res[name]) for name in ["time", *outputs]}
+
+
+def open_fmpy_slave(fmu, *, instance_name="instance", logger=None, logging_on=False):
+    """Extract, instantiate and initialise `fmu` with fmpy's FMU2Slave.
+
+    Parameters
+    ----------
+    logger : callable, optional
+        ``logger(status: int, category: str, message: str)`` receiving the FMU's log messages.
+
+    Returns
+    -------
+    slave : fmpy.fmi2.FMU2Slave
+        Initialised (after exitInitializationMode); call ``terminate`` and ``freeInstance``.
+        The extracted FMU is removed when the slave object is garbage-collected.
+    """
+    import ctypes
+    import shutil
+    import tempfile
+    import weakref
+
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+    from fmpy import calloc, free
+
+    md = read_model_description(str(fmu), validate=False)
+    unzipped = extract(str(fmu), unzipdir=tempfile.mkdtemp(prefix="cleatfmu_fmu_"))
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName=instance_name)
+    weakref.finalize(slave, shutil.rmtree, unzipped, ignore_errors=True)
+    callbacks = None
+    if logger is not None:
+        from fmpy.logging import addLoggerProxy
+
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(
+            lambda _c, _name, status, category, message: logger(
+                status, (category or b"").decode("utf-8", "replace"), (message or b"").decode("utf-8", "replace")))
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(ctypes.byref(callbacks))
+    slave.instantiate(callbacks=callbacks, loggingOn=logging_on or logger is not None)
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    return slave
+
+
+def _split(refs, names):
+    reals = [n for n in names if refs[n][1] == "Real"]
+    bools = [n for n in names if refs[n][1] == "Boolean"]
+    unknown = set(names) - set(reals) - set(bools)
+    if unknown:
+        raise ValueError(f"only Real and Boolean variables are supported, not {sorted(unknown)}")
+    return reals, bools
+
+
+def run_fmpy_loop(fmu, signals: dict, outputs: list[str]) -> dict:
+    """Bare FMU2Slave loop: set inputs of row k, doStep(t_k, h), read outputs (N rows)."""
+    t, h = _grid(signals)
+    refs = variable_refs(fmu)
+    inputs = [n for n in signals if n != "time"]
+    in_vrs = [refs[n][0] for n in inputs]
+    reals, bools = _split(refs, outputs)
+    slave = open_fmpy_slave(fmu)
+    out = {n: np.empty(t.size - 1, dtype=bool if n in bools else float) for n in outputs}
+    try:
+        for k in range(t.size - 1):
+            slave.setReal(in_vrs, [float(signals[n][k]) for n in inputs])
+            slave.doStep(float(t[k]), h)
+            for n, v in zip(reals, slave.getReal([refs[n][0] for n in reals])):
+                out[n][k] = v
+            for n, v in zip(bools, slave.getBoolean([refs[n][0] for n in bools])):
+                out[n][k] = bool(v)
+        slave.terminate()
+    finally:
+        slave.freeInstance()
+    out["time"] = t[1:]
+    return out
+
+
+def run_libcosim(fmu, signals: dict, outputs: list[str]) -> dict:
+    """The loop of :func:`run_fmpy_loop` in the Open Simulation Platform engine (libcosimpy).
+
+    The inputs are applied with an override manipulator before each step and
+    the outputs read with a last-value observer after it.  Sets libcosim's
+    (process-wide) log level to warning.
+
+    Raises
+    ------
+    RuntimeError
+        If libcosim fails to load the FMU or a step fails.
+    """
+    from libcosimpy.CosimEnums import CosimExecutionState
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    t, h = _grid(signals)
+    step_ns = round(h * 1e9)
+    if not math.isclose(step_ns * 1e-9, h, rel_tol=1e-12):
+        raise ValueError(f"step {h} s is not a whole number of nanoseconds")
+    refs = variable_refs(fmu)
+    inputs = [n for n in signals if n != "time"]
+    in_vrs = [refs[n][0] for n in inputs]
+    reals, bools = _split(refs, outputs)
+    log_output_level(CosimLogLevel.WARNING)  # libcosim's default level prints every FMI call
+    execution = CosimExecution.from_step_size(step_ns)
+    slave = CosimLocalSlave(fmu_path=str(Path(fmu).resolve()), instance_name="fmu")
+    index = execution.add_local_slave(slave)
+    if index < 0:
+        raise RuntimeError(f"libcosim could not load {fmu}")
+    observer = CosimObserver.create_last_value()
+    manipulator = CosimManipulator.create_override()
+    execution.add_observer(observer)
+    execution.add_manipulator(manipulator)
+    out = {n: np.empty(t.size - 1, dtype=bool if n in bools else float) for n in outputs}
+    for k in range(t.size - 1):
+        manipulator.slave_real_values(index, in_vrs, [float(signals[n][k]) for n in inputs])
+        if not execution.step() or execution.status().state == CosimExecutionState.ERROR.value:
+            raise RuntimeError(f"libcosim step {k} of {fmu} failed: {execution.status()}")
+        for n, v in zip(reals, observer.last_real_values(index, [refs[n][0] for n in reals])):
+            out[n][k] = v
+        for n, v in zip(bools, observer.last_boolean_values(index, [refs[n][0] for n in bools])):
+            out[n][k] = bool(v)
+    out["time"] = t[1:]
+    return out

@@ -1,0 +1,201 @@
+"""``cleatfmu export``: identified tire parameters -> point-contact tire FMU.
+
+``cleatfmu export PARAMS.json --tire FL -o FL.fmu`` reads the output of
+``cleatfmu identify --json`` and builds (with :func:`build_scripts.build_fmu`)
+an FMI 2.0 co-simulation FMU of the point-contact tire whose tunable
+parameters start at the identified values: ``stiffness`` = k (N/m),
+``damping`` = c (N·s/m) and ``unloaded_radius`` = r0 (m).
+
+The unloaded radius is not identified by the cleat test; unless given with
+``--unloaded-radius-m`` it is :data:`DEFAULT_UNLOADED_RADIUS_M`, an assumption
+(a typical tractor tire).  It only shifts the hub height at which the tire
+touches the road (the hub input starts at r0: zero deflection on a road at
+0 m); k and c do not depend on it.
+
+The FMU records where its values come from: its model description names the
+recording, speed, tire and corner mass, and the start-value file in its
+resources holds the complete ``identify`` entry of the tire.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from .errors import InputError
+from .tire_law import value_problem
+
+__all__ = ["DEFAULT_UNLOADED_RADIUS_M", "FMU_KIND", "read_identified", "export_fmu", "add_parser", "run"]
+
+#: Unloaded tire radius assumed when none is given, m.
+DEFAULT_UNLOADED_RADIUS_M = 0.75
+#: The FMU kind (folder of ``fmu_src``) that ``export`` builds.
+FMU_KIND = "point_contact"
+
+_NUMBERS = ("k", "c", "T", "delta", "zeta", "omega_n", "r2", "mass", "k_ci", "c_ci")
+
+
+def _number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
+    """Read and check a ``cleatfmu identify --json`` document.
+
+    Parameters
+    ----------
+    path : path-like
+        The PARAMS.json file.
+    tire : str, optional
+        Tire to export; may be omitted when the file holds exactly one.
+
+    Returns
+    -------
+    doc : dict
+        The whole document.
+    tire : str
+        The chosen tire.
+    entry : dict
+        Its entry (k in N/m, c in N·s/m, ...).
+
+    Raises
+    ------
+    InputError
+        Unreadable or malformed file, missing tire, invalid k or c (one line, naming the file).
+    """
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(path, "no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(path, f"cannot read: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(path, f"malformed JSON: {exc.msg} (line {exc.lineno}, column {exc.colno})") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("tires"), dict) or not doc["tires"]:
+        raise InputError(path, 'not the output of "cleatfmu identify --json" (no "tires" object)')
+    tires = doc["tires"]
+    if tire is None:
+        if len(tires) != 1:
+            raise InputError(path, f"holds tires {', '.join(tires)}; choose one with --tire")
+        tire = next(iter(tires))
+    if tire not in tires:
+        raise InputError(path, f"no tire {tire!r} (tires in the file: {', '.join(tires)})")
+    entry = tires[tire]
+    if not isinstance(entry, dict):
+        raise InputError(path, f"tire {tire}: entry is not an object")
+    for key in ("k", "c"):
+        if key not in entry:
+            raise InputError(path, f"tire {tire}: missing {key!r}")
+    for key in _NUMBERS:
+        if key in entry and not (_number(entry[key]) and math.isfinite(entry[key])):
+            raise InputError(path, f"tire {tire}: {key} must be a finite number, got {entry[key]!r}")
+    for key, name, unit, strictly in (("k", "stiffness k", "N/m", True), ("c", "damping c", "N*s/m", False)):
+        problem = value_problem(name, unit, entry[key], strictly_positive=strictly)
+        if problem is not None:
+            raise InputError(path, f"tire {tire}: {problem}")
+    if "speed_kmh" in doc and not (_number(doc["speed_kmh"]) and math.isfinite(doc["speed_kmh"])):
+        raise InputError(path, f"speed_kmh must be a finite number, got {doc['speed_kmh']!r}")
+    return doc, tire, entry
+
+
+def _description(doc: dict, tire: str, starts: dict, entry: dict, radius_given: bool) -> str:
+    """Model description: provenance, then every parameter as ``name = value unit (meaning)``.
+
+    ``fmpy info`` prints the model description but lists only inputs and
+    outputs, so the parameters are summarised here, with the units and
+    descriptions of the FMU kind's variable table.
+    """
+    from build_scripts import load_kind
+
+    kind = load_kind(FMU_KIND)
+    parts = [f"Point-contact tire {tire} (spring k parallel to damper c, SI units), identified by the cleat test"]
+    if doc.get("recording"):
+        parts.append(f" of recording '{doc['recording']}'")
+    if _number(doc.get("speed_kmh")):
+        parts.append(f" at {doc['speed_kmh']:.4g} km/h")
+    if _number(entry.get("mass")):
+        parts.append(f" (corner mass {entry['mass']:.6g} kg)")
+    rows = []
+    for name in kind.names("parameter"):
+        var = kind.variable(name)
+        note = "" if name != "unloaded_radius" else ("; given" if radius_given else "; default assumption")
+        rows.append(f"{name} = {starts[name]:.6g} {var.unit} ({var.description}{note})")
+    return "".join(parts) + ". Parameters: " + "; ".join(rows) + "."
+
+
+def export_fmu(params_path, output_path, *, tire: str | None = None,
+               unloaded_radius_m: float | None = None) -> Path:
+    """Build the point-contact tire FMU for one identified tire.
+
+    Parameters
+    ----------
+    params_path : path-like
+        Output of ``cleatfmu identify --json``.
+    output_path : path-like
+        The ``.fmu`` to write (atomically: nothing is left behind on failure).
+    tire : str, optional
+        Tire to export (required when the file holds several).
+    unloaded_radius_m : float, optional
+        Unloaded radius r0, m (default :data:`DEFAULT_UNLOADED_RADIUS_M`, an assumption).
+
+    Returns
+    -------
+    Path
+        `output_path`.
+
+    Raises
+    ------
+    InputError
+        For every problem with the inputs.
+    """
+    from build_scripts import build_fmu
+
+    doc, tire, entry = read_identified(params_path, tire)
+    radius_given = unloaded_radius_m is not None
+    radius = float(unloaded_radius_m) if radius_given else DEFAULT_UNLOADED_RADIUS_M
+    problem = value_problem("unloaded radius", "m", radius, strictly_positive=True)
+    if problem is not None:
+        raise InputError("--unloaded-radius-m", problem)
+    output_path = Path(output_path)
+    if output_path.suffix != ".fmu":
+        raise InputError(output_path, "the output file name must end with .fmu")
+    if not output_path.parent.is_dir():
+        raise InputError(output_path, f"directory {str(output_path.parent)!r} does not exist")
+    if output_path.is_dir():
+        raise InputError(output_path, "is a directory")
+    provenance = {"command": "cleatfmu export", "params_file": Path(params_path).name, "tire": tire,
+                  "recording": doc.get("recording"), "speed_kmh": doc.get("speed_kmh"), "identified": entry,
+                  "unloaded_radius_m": radius,
+                  "unloaded_radius_source": "given" if radius_given else "default assumption"}
+    starts = {"stiffness": entry["k"], "damping": entry["c"], "unloaded_radius": radius}
+    try:
+        return build_fmu(FMU_KIND, output_path, start_values=starts, provenance=provenance,
+                         description=_description(doc, tire, starts, entry, radius_given))
+    except OSError as exc:
+        raise InputError(output_path, f"cannot write: {exc.strerror or exc}") from None
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cleatfmu export``."""
+    p = subparsers.add_parser(
+        "export", help="build a point-contact tire FMU from identified parameters",
+        description="Build an FMI 2.0 co-simulation FMU of the point-contact tire (spring k parallel to damper c) "
+                    "whose tunable parameters start at the values identified by 'cleatfmu identify --json'.")
+    p.add_argument("params", metavar="PARAMS.json", help="output of 'cleatfmu identify --json'")
+    p.add_argument("--tire", metavar="TIRE", help="tire to export (required when the file holds several)")
+    p.add_argument("-o", "--output", metavar="FMU", help="FMU file to write (default: TIRE.fmu)")
+    p.add_argument("--unloaded-radius-m", type=float, default=None, metavar="R0",
+                   help=f"unloaded tire radius, m (default {DEFAULT_UNLOADED_RADIUS_M}, an assumption; "
+                        f"it only sets the hub height at which the tire touches the road)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Run ``cleatfmu export``; returns 0 (user errors raise InputError)."""
+    _, tire, entry = read_identified(args.params, args.tire)
+    output = Path(args.output) if args.output else Path(f"{tire}.fmu")
+    path = export_fmu(args.params, output, tire=tire, unloaded_radius_m=args.unloaded_radius_m)
+    print(f"wrote {path}: tire {tire}, stiffness {entry['k']:.6g} N/m, damping {entry['c']:.6g} N.s/m")
+    return 0

@@ -1,0 +1,146 @@
+"""``cleatfmu export``: identified parameters -> FMU, through the real CLI entry point."""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+import zipfile
+
+import pytest
+
+from identification import cli, export
+
+FL = {"k": 412345.678901234, "c": 2345.6789, "T": 0.41, "delta": 0.9, "zeta": 0.142, "omega_n": 15.5,
+      "r2": 0.98, "n_peaks": 5, "mass": 1716.2}
+FR = {**FL, "k": 398000.0, "c": 2100.0}
+
+
+@pytest.fixture(autouse=True)
+def export_registered(monkeypatch):
+    """Register the export command the way identification.cli does for its command modules."""
+    if ".export" not in cli._COMMAND_MODULES:
+        monkeypatch.setattr(cli, "_COMMAND_MODULES", [*cli._COMMAND_MODULES, ".export"])
+
+
+def params_file(tmp_path, doc=None, text=None, name="params.json"):
+    path = tmp_path / name
+    if text is None:
+        doc = doc if doc is not None else {"recording": "cleat_7kmh.csv", "speed_kmh": 7.0,
+                                           "tires": {"FL": FL, "FR": FR}}
+        text = json.dumps(doc)
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def starts(fmu) -> dict:
+    root = ET.fromstring(zipfile.ZipFile(fmu).read("modelDescription.xml"))
+    return {sv.get("name"): float(sv.find("Real").get("start")) for sv in root.iter("ScalarVariable")
+            if sv.find("Real") is not None and sv.find("Real").get("start") is not None}
+
+
+def test_export_writes_an_fmu_starting_at_the_identified_values(tmp_path, capsys):
+    from fmpy.validation import validate_fmu
+
+    params = params_file(tmp_path)
+    out = tmp_path / "out" / "FL.fmu"
+    out.parent.mkdir()
+    assert cli.main(["export", str(params), "--tire", "FL", "-o", str(out)]) == 0
+    assert "wrote" in capsys.readouterr().out
+    assert validate_fmu(str(out)) == []
+    s = starts(out)
+    assert (s["stiffness"], s["damping"]) == (FL["k"], FL["c"])
+    assert s["unloaded_radius"] == s["hub_z"] == export.DEFAULT_UNLOADED_RADIUS_M
+    root = ET.fromstring(zipfile.ZipFile(out).read("modelDescription.xml"))
+    assert "cleat_7kmh.csv" in root.get("description") and "FL" in root.get("description")
+    provenance = json.loads(zipfile.ZipFile(out).read("resources/cleatfmu_point_contact_start.json"))["provenance"]
+    assert provenance["identified"] == FL and provenance["recording"] == "cleat_7kmh.csv"
+    assert provenance["unloaded_radius_source"] == "default assumption"
+    assert sorted(p.name for p in out.parent.iterdir()) == ["FL.fmu"]
+
+
+def test_exported_fmu_computes_with_the_identified_stiffness(tmp_path):
+    from build_scripts.runners import open_fmpy_slave, variable_refs
+
+    out = tmp_path / "FR.fmu"
+    assert cli.main(["export", str(params_file(tmp_path)), "--tire", "FR", "-o", str(out),
+                     "--unloaded-radius-m", "0.8"]) == 0
+    vr = {n: r for n, (r, _) in variable_refs(out).items()}
+    s = open_fmpy_slave(out)
+    try:
+        s.setReal([vr["hub_z"]], [0.79])
+        assert s.getReal([vr["force_z"]])[0] == pytest.approx(FR["k"] * 0.01, rel=1e-12)
+    finally:
+        s.freeInstance()
+
+
+def test_default_output_name_and_single_tire_file(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    params = params_file(tmp_path, {"recording": "r.csv", "speed_kmh": 5.0, "tires": {"RL": FL}})
+    assert cli.main(["export", str(params)]) == 0
+    assert (tmp_path / "RL.fmu").is_file()
+
+
+def test_help_documents_the_default_radius_assumption(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["export", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"default {export.DEFAULT_UNLOADED_RADIUS_M}, an assumption" in text
+
+
+BAD_FILES = {
+    "missing tire": (dict(doc={"tires": {"FR": FR}}), ["--tire", "FL"], "no tire 'FL'"),
+    "k zero": (dict(doc={"tires": {"FL": {**FL, "k": 0.0}}}), [], "stiffness k must be > 0"),
+    "k negative": (dict(doc={"tires": {"FL": {**FL, "k": -5.0}}}), [], "stiffness k must be > 0"),
+    "c negative": (dict(doc={"tires": {"FL": {**FL, "c": -1.0}}}), [], "damping c must be >= 0"),
+    "k NaN": (dict(text='{"tires": {"FL": {"k": NaN, "c": 1.0}}}'), [], "k must be a finite number"),
+    "c infinite": (dict(text='{"tires": {"FL": {"k": 1e5, "c": Infinity}}}'), [], "c must be a finite number"),
+    "k string": (dict(doc={"tires": {"FL": {**FL, "k": "4e5"}}}), [], "k must be a finite number"),
+    "k missing": (dict(doc={"tires": {"FL": {"c": 1.0}}}), [], "missing 'k'"),
+    "malformed JSON": (dict(text='{"tires": {"FL": '), [], "malformed JSON"),
+    "no tires": (dict(doc={"recording": "x"}), [], "no \"tires\" object"),
+    "several tires": (dict(doc={"tires": {"FL": FL, "FR": FR}}), [], "choose one with --tire"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_FILES))
+def test_bad_params_file_exits_2_with_one_line_naming_the_file(tmp_path, capsys, case):
+    spec, extra, fragment = BAD_FILES[case]
+    params = params_file(tmp_path, **spec)
+    out = tmp_path / "out.fmu"
+    before = sorted(tmp_path.iterdir())
+    assert cli.main(["export", str(params), "-o", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("cleatfmu: error: ") and str(params) in err
+    assert fragment in err
+    assert sorted(tmp_path.iterdir()) == before
+
+
+@pytest.mark.parametrize("args, source, fragment", [
+    (["--unloaded-radius-m", "0"], "--unloaded-radius-m", "must be > 0"),
+    (["--unloaded-radius-m", "nan"], "--unloaded-radius-m", "must be finite"),
+    (["-o", "FL.zip"], "FL.zip", "must end with .fmu"),
+    (["-o", "missing_dir/FL.fmu"], "missing_dir", "does not exist"),
+])
+def test_bad_options_exit_2_and_write_nothing(tmp_path, monkeypatch, capsys, args, source, fragment):
+    monkeypatch.chdir(tmp_path)
+    params = params_file(tmp_path)
+    before = sorted(tmp_path.iterdir())
+    assert cli.main(["export", str(params), "--tire", "FL", *args]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and source in err and fragment in err
+    assert sorted(tmp_path.iterdir()) == before
+
+
+def test_missing_params_file(tmp_path, capsys):
+    assert cli.main(["export", str(tmp_path / "nope.json"), "--tire", "FL"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "nope.json: no such file" in err
+
+
+def test_failed_export_keeps_the_previous_fmu(tmp_path, capsys):
+    out = tmp_path / "FL.fmu"
+    out.write_bytes(b"previous FMU")
+    params = params_file(tmp_path, {"tires": {"FL": {**FL, "c": -3.0}}})
+    assert cli.main(["export", str(params), "-o", str(out)]) == 2
+    assert out.read_bytes() == b"previous FMU"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["FL.fmu", "params.json"]
