@@ -33,7 +33,7 @@ DEFAULT_UNLOADED_RADIUS_M = 0.75
 #: The FMU kind (folder of ``fmu_src``) that ``export`` builds.
 FMU_KIND = "point_contact"
 
-_NUMBERS = ("k", "c", "T", "delta", "zeta", "omega_n", "r2", "mass", "k_ci", "c_ci")
+_NUMBERS = ("k", "c", "T", "delta", "zeta", "omega_n", "r2", "mass")
 
 
 def _number(value) -> bool:
@@ -91,6 +91,11 @@ def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
     for key in _NUMBERS:
         if key in entry and not (_number(entry[key]) and math.isfinite(entry[key])):
             raise InputError(path, f"tire {tire}: {key} must be a finite number, got {entry[key]!r}")
+    for key in ("k_ci", "c_ci"):  # the waveform method's 95 % intervals
+        ci = entry.get(key)
+        if ci is not None and not (isinstance(ci, list) and len(ci) == 2
+                                   and all(_number(v) and math.isfinite(v) for v in ci) and ci[0] <= ci[1]):
+            raise InputError(path, f"tire {tire}: {key} must be [low, high], got {ci!r}")
     for key, name, unit, strictly in (("k", "stiffness k", "N/m", True), ("c", "damping c", "N*s/m", False)):
         problem = value_problem(name, unit, entry[key], strictly_positive=strictly)
         if problem is not None:

@@ -1,0 +1,107 @@
+"""Figures (matplotlib, headless): the paper's Figure 9a/9b and measured-vs-simulated overlays.
+
+Every function draws into a new figure and returns it; :func:`save_png` writes
+it atomically.  Units are on every axis.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from ._files import atomic_write_bytes
+
+__all__ = ["figure", "save_png", "png_bytes", "plot_decay", "plot_log_peaks", "plot_comparison"]
+
+
+def figure(nrows=1, ncols=1, *, size=(9.0, 4.0), **kwargs):
+    """A new figure with the non-interactive Agg backend."""
+    import matplotlib
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(nrows, ncols, figsize=size, **kwargs)
+    return fig, axes
+
+
+def png_bytes(fig, dpi: int = 110) -> bytes:
+    """The figure as PNG bytes; the figure is closed."""
+    import matplotlib.pyplot as plt
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def save_png(fig, path, dpi: int = 110) -> Path:
+    """Write the figure to `path` (all or nothing); the figure is closed."""
+    path = Path(path)
+    atomic_write_bytes({path: png_bytes(fig, dpi)})
+    return path
+
+
+def _decay_curve(ax, sig, decay_rate, style, label):
+    t1, a1 = sig.peak_times_s[0], sig.peak_values_m_s2[0]
+    tt = np.linspace(t1, sig.window_end_s, 200)
+    ax.plot(tt, a1 * np.exp(decay_rate * (tt - t1)), style, lw=1.2, label=label)
+
+
+def plot_decay(ax, sig, decay_rate, *, label="measured", color="C0", t_span=None):
+    """Paper Fig. 9a: filtered acceleration, the peaks used and the fitted decay curve."""
+    t = sig.time_s
+    lo, hi = t_span or (sig.impact_s - 0.1, sig.window_end_s + 0.1)
+    sel = (t >= lo) & (t <= hi)
+    ax.plot(t[sel], sig.filtered_m_s2[sel], color=color, lw=0.9, label=f"{label} (low-pass)")
+    ax.plot(sig.peak_times_s, sig.peak_values_m_s2, "o", mfc="none", color=color, label=f"{label} peaks")
+    _decay_curve(ax, sig, decay_rate, "--", f"{label} decay curve")
+    ax.set_xlabel("time / s")
+    ax.set_ylabel("hub acceleration / (m/s²)")
+    ax.grid(alpha=0.3)
+
+
+def plot_log_peaks(ax, sig, decay_rate, *, label="measured", color="C0"):
+    """Paper Fig. 9b: ln(peak) against time and the regression through the first peak."""
+    t, y = sig.peak_times_s, np.log(sig.peak_values_m_s2)
+    ax.plot(t, y, "o", color=color, label=f"{label} ln(peak)")
+    ax.plot(t, y[0] + decay_rate * (t - t[0]), "--", color=color, label=f"fit, slope {decay_rate:.3f} 1/s")
+    ax.set_xlabel("time / s")
+    ax.set_ylabel("ln(peak / (m/s²))")
+    ax.grid(alpha=0.3)
+
+
+_WINDOW_COLORS = {"impact": "#f4c27a", "free_decay": "#bfe3bf", "other_axle": "#c9c3f0"}
+
+
+def plot_comparison(cmp, *, title: str | None = None):
+    """Measured vs co-simulated hub acceleration with both decay curves, and the residual per window."""
+    fig, (ax, ax_r) = figure(2, 1, size=(10.0, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
+    t = cmp.time_s
+    meas, sim = cmp.measured_signal, cmp.simulated_signal
+    lo = min(w.start_s for w in cmp.windows.values()) - 0.05
+    hi = t[-1]
+    sel = (t >= lo) & (t <= hi)
+    ax.plot(t[sel], cmp.measured_m_s2[sel], color="C0", lw=0.9, label="measured (low-pass)")
+    ax.plot(t[sel], cmp.simulated_m_s2[sel], color="C3", lw=0.9, label="co-simulated FMU (low-pass)")
+    ax.plot(meas.peak_times_s, meas.peak_values_m_s2, "o", mfc="none", color="C0", label="measured peaks")
+    ax.plot(sim.peak_times_s, sim.peak_values_m_s2, "x", color="C3", label="simulated peaks")
+    _decay_curve(ax, meas, -cmp.decay_rate_measured, "C0--",
+                 f"measured decay, {cmp.decay_rate_measured:.3f} 1/s")
+    _decay_curve(ax, sim, -cmp.decay_rate_simulated, "C3--",
+                 f"simulated decay, {cmp.decay_rate_simulated:.3f} 1/s")
+    ax.set_ylabel("hub acceleration / (m/s²)")
+    ax.set_title(title or f"{cmp.tire}: NRMSE {cmp.nrmse:.1%}, R² {cmp.r2:.3f}, "
+                          f"k_FMU {cmp.k_fmu / 1e3:.1f} kN/m, c_FMU {cmp.c_fmu / 1e3:.2f} kN·s/m")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncol=2, loc="upper right")
+    ax_r.plot(t[sel], cmp.simulated_m_s2[sel] - cmp.measured_m_s2[sel], color="k", lw=0.7, label="residual")
+    for name, w in cmp.windows.items():
+        color = _WINDOW_COLORS.get(name, "#dddddd")
+        ax.axvspan(max(w.start_s, lo), w.end_s, color=color, alpha=0.35, lw=0)
+        ax_r.axvspan(max(w.start_s, lo), w.end_s, color=color, alpha=0.35, lw=0,
+                     label=f"{name.replace('_', ' ')}: NRMSE {w.nrmse:.0%}, {w.misfit_share:.0%} of misfit")
+    ax_r.legend(fontsize=7, loc="upper right", ncol=2)
+    ax_r.set_xlabel("time / s")
+    ax_r.set_ylabel("sim − meas / (m/s²)")
+    ax_r.grid(alpha=0.3)
+    return fig
