@@ -38,29 +38,39 @@ def project_version() -> str:
         return "unknown"
 
 
-def resolve_start_values(kind: FmuKind, overrides: dict | None = None) -> dict[str, float]:
+def resolve_start_values(kind: FmuKind, overrides: dict | None = None) -> dict[str, float | bool]:
     """Start value of every input and parameter: the kind's defaults, then `overrides`.
 
     A default given as a variable name copies that variable's (resolved) start.
+    Real variables take finite numbers (returned as float), Boolean variables
+    ``True`` or ``False``.
 
     Raises
     ------
     ValueError
-        For an override that is not an input or parameter, or not a finite number.
+        For an override that is not an input or parameter, or not a value of its type.
     """
-    settable = {v.name for v in kind.variables if v.causality in ("input", "parameter")}
-    values = {v.name: v.start for v in kind.variables if v.name in settable}
+    types = {v.name: v.type for v in kind.variables if v.causality in ("input", "parameter")}
+    values = {v.name: v.start for v in kind.variables if v.name in types}
     for name, value in (overrides or {}).items():
-        if name not in settable:
+        if name not in types:
             raise ValueError(f"{name!r} is not an input or parameter of FMU kind {kind.name} "
-                             f"(settable: {', '.join(sorted(settable))})")
-        if isinstance(value, (bool, str)) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise ValueError(f"start value of {name!r} must be a finite number, got {value!r}")
-        values[name] = float(value)
+                             f"(settable: {', '.join(sorted(types))})")
+        values[name] = _typed_start(name, types[name], value)
     for name, value in values.items():
         if isinstance(value, str):
-            values[name] = float(values[value])
+            values[name] = values[value]
     return values
+
+
+def _typed_start(name: str, typ: str, value):
+    if typ == "Boolean":
+        if not isinstance(value, bool):
+            raise ValueError(f"start value of Boolean {name!r} must be True or False, got {value!r}")
+        return value
+    if isinstance(value, (bool, str)) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"start value of {name!r} must be a finite number, got {value!r}")
+    return float(value)
 
 
 @contextlib.contextmanager
@@ -125,8 +135,9 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
     dest : path-like
         The ``.fmu`` file to write.  It is written atomically: a temporary file
         beside it, renamed at the end; nothing is left behind on failure.
-    start_values : dict of str to float, optional
-        Start values of inputs/parameters in SI units (others: the kind's defaults).
+    start_values : dict of str to float or bool, optional
+        Start values of inputs/parameters in SI units, bool for Boolean
+        parameters (others: the kind's defaults).
     provenance : dict, optional
         JSON-serialisable record of where the values come from, stored in the
         FMU's start-value file.

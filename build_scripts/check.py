@@ -1,16 +1,18 @@
 """``python -m build_scripts.check``: build and check every FMU kind in ``fmu_src``.
 
-For each kind, with the kind's default start values:
+For each kind:
 
-1. build the FMU (:func:`build_scripts.build_fmu`);
+1. build the FMU (:func:`build_scripts.build_fmu`) with the kind's default
+   start values;
 2. compliance: ``validate_fmu(fmu) == []`` and the checks of
    :mod:`build_scripts.compliance` (units, descriptions, default experiment,
    model structure, module names);
 3. simulate the default experiment with ``fmpy.simulate_fmu`` on the input
-   signals of the kind's reference CSV and compare every output with the
-   reference: ``|x - ref| <= atol + rtol |ref|`` with the kind's tolerances
-   (point_contact: rtol 1e-12, atol 1e-12 in the output's SI unit; booleans
-   exactly);
+   signals of the kind's reference CSV, with the reference's start values
+   (``kind.json``: ``reference.start_values``, set before initialization),
+   and compare every output with the reference:
+   ``|x - ref| <= atol + rtol |ref|`` with the kind's tolerances (rtol, atol
+   in the output's SI unit, from ``kind.json``; booleans exactly);
 4. run the same inputs in libcosimpy (Open Simulation Platform) and compare
    with fmpy: the bare fmpy FMU2Slave loop must agree bit for bit, and both
    with the reference within its tolerance;
@@ -31,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .build import build_fmu
+from .build import build_fmu, resolve_start_values
 from .compliance import compliance_problems
 from .kinds import kind_names, load_kind, module_name_conflicts
 from .reference import read_reference
@@ -58,12 +60,18 @@ def compare(label: str, got: dict, ref: dict, names, rtol: float, atol: float, r
     return problems
 
 
-def state_round_trip_problems(fmu, signals: dict, outputs) -> list[str]:
-    """Get/set and serialize/deserialize the FMU state mid-run; outputs must repeat bit for bit."""
+def state_round_trip_problems(fmu, signals: dict, outputs, start_values: dict | None = None) -> list[str]:
+    """Get/set and serialize/deserialize the FMU state mid-run; outputs must repeat bit for bit.
+
+    The state is taken from an instance started with `start_values`; the
+    deserialized copy goes to an instance started with the FMU's own values,
+    so the state must carry the parameters too.
+    """
     refs = variable_refs(fmu)
     inputs = [n for n in signals if n != "time"]
     in_vrs = [refs[n][0] for n in inputs]
     reals = [refs[n][0] for n in outputs if refs[n][1] == "Real"]
+    bools = [refs[n][0] for n in outputs if refs[n][1] == "Boolean"]
     t = np.asarray(signals["time"])
     h = float(t[1] - t[0])
     half = (t.size - 1) // 2
@@ -73,11 +81,11 @@ def state_round_trip_problems(fmu, signals: dict, outputs) -> list[str]:
         for k in ks:
             slave.setReal(in_vrs, [float(signals[n][k]) for n in inputs])
             slave.doStep(float(t[k]), h)
-            out.append(tuple(slave.getReal(reals)))
+            out.append((*slave.getReal(reals), *(slave.getBoolean(bools) if bools else ())))
         return out
 
     problems = []
-    slave = open_fmpy_slave(fmu, instance_name="state")
+    slave = open_fmpy_slave(fmu, instance_name="state", start_values=start_values)
     try:
         run(slave, range(half))
         state = slave.getFMUstate()
@@ -128,20 +136,22 @@ def check_kind(kind: str, workdir: Path, log=print) -> list[str]:
     if t[-1] != float(de.stopTime) or not np.array_equal(t, grid):
         problems.append("reference time grid is not the default experiment's")
     signals = {"time": t, **{n: ref[n] for n in inputs}}
-    sim = simulate_fmpy(fmu, signals, outputs, start_values={})
+    starts = k.reference_start_values
+    resolve_start_values(k, starts)  # known inputs/parameters with values of their types, or ValueError
+    sim = simulate_fmpy(fmu, signals, outputs, start_values=starts)
     problems += compare("fmpy.simulate_fmu vs reference", sim, ref, ["time", *outputs],
                         k.reference_rtol, k.reference_atol)
     log(f"{kind}: default experiment simulated with fmpy ({t.size} samples) and compared with the reference")
 
-    loop = run_fmpy_loop(fmu, signals, outputs)
-    cosim = run_libcosim(fmu, signals, outputs)
+    loop = run_fmpy_loop(fmu, signals, outputs, start_values=starts)
+    cosim = run_libcosim(fmu, signals, outputs, start_values=starts)
     problems += compare("libcosimpy vs fmpy loop", cosim, loop, outputs, 0.0, 0.0)
     problems += compare("libcosimpy vs reference", cosim, ref, outputs, k.reference_rtol, k.reference_atol,
                         rows=slice(1, None))
     log(f"{kind}: run in libcosimpy and compared with fmpy")
 
     if k.fmu_state:
-        problems += [f"FMU state: {p}" for p in state_round_trip_problems(fmu, signals, outputs)]
+        problems += [f"FMU state: {p}" for p in state_round_trip_problems(fmu, signals, outputs, starts)]
         log(f"{kind}: FMU state get/set and serialize/deserialize round trips checked")
     if not problems:
         log(f"{kind}: OK")

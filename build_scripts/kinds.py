@@ -7,9 +7,11 @@ A kind is a folder ``fmu_src/<kind>/`` with
   of the kind's folder copied into the FMU), ``model_identifier`` (the slave
   class, defined in one of these files), ``modules`` (extra modules copied
   into the FMU: ``{name inside the FMU: "package.module" of this project}``),
-  ``reference`` (``{"file": CSV, "rtol": ..., "atol": ...}``, the regression
-  result of the default experiment) and ``fmu_state`` (whether the kind
-  supports getting, setting and serializing its state);
+  ``reference`` (``{"file": CSV, "rtol": ..., "atol": ..., "start_values":
+  {...}}``, the regression result of the default experiment, run with the
+  kind's default start values updated by the optional ``start_values``) and
+  ``fmu_state`` (whether the kind supports getting, setting and serializing
+  its state);
 * the slave script and files, one of which declares the variables in one
   literal table ``VARIABLES`` (read here with :mod:`ast`, without importing
   anything) and the name of the start-value file in ``START_FILE``.
@@ -62,6 +64,7 @@ class FmuKind:
     reference_file: str
     reference_rtol: float
     reference_atol: float
+    reference_start_values: dict
     fmu_state: bool
     start_file: str
     variables: tuple
@@ -152,6 +155,7 @@ def load_kind(name: str) -> FmuKind:
         files = tuple(manifest.get("files", ()))
         modules, reference, fmu_state = dict(manifest["modules"]), manifest["reference"], bool(manifest["fmu_state"])
         ref_file, rtol, atol = reference["file"], float(reference["rtol"]), float(reference["atol"])
+        ref_starts = dict(reference.get("start_values", {}))
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"{where}: malformed manifest ({exc})") from None
     own = {filename[:-3] for filename in (script, *files)} | set(modules)
@@ -179,7 +183,8 @@ def load_kind(name: str) -> FmuKind:
             raise ValueError(f"fmu_src/{name}: VARIABLES row {vr} must have columns {_VARIABLE_COLUMNS}")
         variables.append(Variable(*row, value_reference=vr))
     return FmuKind(name=name, folder=folder, script=script, files=files, model_identifier=identifier, modules=modules,
-                   reference_file=ref_file, reference_rtol=rtol, reference_atol=atol, fmu_state=fmu_state,
+                   reference_file=ref_file, reference_rtol=rtol, reference_atol=atol,
+                   reference_start_values=ref_starts, fmu_state=fmu_state,
                    start_file=literals["START_FILE"], variables=tuple(variables))
 
 

@@ -3,8 +3,9 @@
 Each kind's folder holds ``reference.csv``: the time grid of the FMU's
 ``DefaultExperiment``, the input signals fed to it (columns named like the
 inputs) and the outputs that ``fmpy.simulate_fmu`` recorded for the FMU built
-with the kind's default start values (see :mod:`build_scripts.runners` for
-the alignment of inputs and outputs).  Floats are written with ``repr``
+with the kind's default start values, run with the reference's start values
+(``kind.json``: ``reference.start_values``, e.g. to switch options on; see
+:mod:`build_scripts.runners` for the alignment of inputs and outputs).  Floats are written with ``repr``
 (exact round trip), booleans as 0/1; lines starting with ``#`` are comments.
 
 ``python -m build_scripts.reference KIND`` rewrites the file after an
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import json
 import math
 import sys
 import tempfile
@@ -69,10 +71,68 @@ def _point_contact_closed_form(inputs: dict, starts: dict) -> dict:
             "in_contact": deflection > 0.0}
 
 
+def _extended_tire_cleat_run(t: np.ndarray, starts: dict) -> dict:
+    """Prescribed hub and road motion of a tire rolling over its built-in cleat (SI units).
+
+    Hub: at 7 km/h from x = 0.013 m (so that no sample falls on an edge of the
+    footprint's overlap with the cleat); vertically at the static deflection
+    n W / k of the progressive spring until the footprint reaches the cleat,
+    then a damped oscillation (ζ = 0.15, amplitude 0.12 m, natural frequency
+    of the mass W / g on k) about it, which lifts the tire off the road.
+    Road (besides the built-in cleat and the lugs): a 4 mm, 1.5 Hz undulation.
+    """
+    g, speed, x0 = 9.80665, 7.0 / 3.6, 0.013
+    k, r0, w_load = starts["stiffness"], starts["unloaded_radius"], starts["static_load"]
+    static = r0 - starts["stiffness_exponent"] * w_load / k
+    t_reach = (starts["cleat_x"] - 0.5 * starts["footprint_length"] - x0) / speed
+    wn, zeta, amp = math.sqrt(k * g / w_load), 0.15, 0.12
+    wd = wn * math.sqrt(1.0 - zeta * zeta)
+    tau = np.maximum(t - t_reach, 0.0)
+    decay, s, c = np.exp(-zeta * wn * tau), np.sin(wd * tau), np.cos(wd * tau)
+    a, omega = 0.004, 2.0 * math.pi * 1.5
+    hub_vz = np.where(t > t_reach, amp * decay * (wd * c - zeta * wn * s), 0.0)
+    return {"hub_z": static + amp * decay * s, "hub_vz": hub_vz,
+            "road_z": a * np.sin(omega * t), "road_vz": a * omega * np.cos(omega * t),
+            "hub_x": x0 + speed * t, "hub_vx": np.full_like(t, speed)}
+
+
+def _extended_tire_closed_form(inputs: dict, starts: dict) -> dict:
+    """The extended tire, vectorised; the enveloped cleat as a difference of its antiderivative.
+
+    With G(s) = H clip(s − x_c, 0, w) the cleat height integrated up to s, the
+    footprint average is (G(x + ℓ/2) − G(x − ℓ/2)) / ℓ and its slope
+    H (1[x_c < x + ℓ/2 < x_c + w] − 1[x_c < x − ℓ/2 < x_c + w]) / ℓ.
+    """
+    p = starts
+    x, length, xc = inputs["hub_x"], p["footprint_length"], p["cleat_x"]
+    height, width = p["cleat_height"], p["cleat_width"]
+    if length > 0.0:
+        ends = (x + 0.5 * length, x - 0.5 * length)
+        integral = [height * np.clip(e - xc, 0.0, width) for e in ends]
+        inside = [((e > xc) & (e < xc + width)).astype(float) for e in ends]
+        cleat, cleat_slope = (integral[0] - integral[1]) / length, height * (inside[0] - inside[1]) / length
+    else:
+        cleat, cleat_slope = np.where((x >= xc) & (x < xc + width), height, 0.0), np.zeros_like(x)
+    arg = 2.0 * math.pi / p["lug_pitch"] * x + p["lug_phase"]
+    lug = p["lug_amplitude"] * np.sin(arg)
+    lug_slope = p["lug_amplitude"] * 2.0 * math.pi / p["lug_pitch"] * np.cos(arg)
+    road = inputs["road_z"] + cleat + lug
+    deflection = p["unloaded_radius"] - (inputs["hub_z"] - road)
+    rate = inputs["road_vz"] + (cleat_slope + lug_slope) * inputs["hub_vx"] - inputs["hub_vz"]
+    n, w_load, k = p["stiffness_exponent"], p["static_load"], p["stiffness"]
+    elastic = k * deflection if n == 1.0 else w_load * np.sign(deflection) * np.abs(deflection * k / (n * w_load)) ** n
+    force = elastic + p["damping"] * rate + p["friction_force"] * np.tanh(rate / p["friction_velocity"])
+    contact = (deflection > 0.0) & (force > 0.0) if p["unilateral"] else deflection > 0.0
+    if p["unilateral"]:
+        force = np.where(contact, force, 0.0)
+    return {"force_z": force, "deflection": deflection, "deflection_rate": rate, "in_contact": contact,
+            "road_effective_z": road}
+
+
 #: kind -> function(t, start values) returning the input signals of its default experiment.
-INPUT_SIGNALS = {"point_contact": _point_contact_cleat_run}
+INPUT_SIGNALS = {"point_contact": _point_contact_cleat_run, "extended_tire": _extended_tire_cleat_run}
 #: kind -> function(inputs, start values) returning its outputs in closed form.
-CLOSED_FORM = {"point_contact": _point_contact_closed_form}
+CLOSED_FORM = {"point_contact": _point_contact_closed_form, "extended_tire": _extended_tire_closed_form}
 
 
 def reference_path(kind) -> Path:
@@ -134,13 +194,13 @@ def main(argv=None) -> int:
     from fmpy import read_model_description
 
     k = load_kind(args.kind)
-    starts = resolve_start_values(k)
+    starts = resolve_start_values(k, k.reference_start_values)
     with tempfile.TemporaryDirectory(prefix="cleatfmu_ref_") as tmp:
         fmu = build_fmu(args.kind, Path(tmp) / f"{args.kind}.fmu")
         de = read_model_description(str(fmu)).defaultExperiment
         signals = reference_signals(args.kind, float(de.startTime), float(de.stopTime), float(de.stepSize), starts)
         outputs = k.names("output")
-        result = simulate_fmpy(fmu, signals, outputs)
+        result = simulate_fmpy(fmu, signals, outputs, start_values=k.reference_start_values)
     expected = closed_form_outputs(args.kind, signals, starts)
     for name in outputs:
         if not np.allclose(result[name], expected[name], rtol=k.reference_rtol, atol=k.reference_atol):
@@ -149,9 +209,12 @@ def main(argv=None) -> int:
     path = reference_path(args.kind)
     columns = {"time": result["time"], **{n: signals[n] for n in signals if n != "time"},
                **{n: result[n] for n in outputs}}
+    run_with = (f"run with {json.dumps(k.reference_start_values, sort_keys=True)} (kind.json),\n"
+                if k.reference_start_values else "")
     write_reference(path, args.kind, columns,
                     f"Reference result of the default experiment of FMU kind {args.kind} (fmpy.simulate_fmu),\n"
-                    f"built with the default start values; inputs as fed, outputs as recorded (SI units).\n"
+                    f"built with the default start values; {run_with}"
+                    f"inputs as fed, outputs as recorded (SI units).\n"
                     f"Regenerate: python -m build_scripts.reference {args.kind}")
     print(f"wrote {path} ({len(result['time'])} rows)")
     return 0

@@ -11,6 +11,10 @@ Signals are dicts ``{name: 1-D array}`` on a uniform time grid ``t_k = start
 * :func:`run_fmpy_loop` and :func:`run_libcosim` — for k = 0..N-1: set the
   inputs of row k, step from t_k to t_{k+1}, read the outputs; so their
   row k equals row k+1 of :func:`simulate_fmpy`.
+
+``start_values`` (``{name: value}``, floats for Real and bools for Boolean
+variables) are set before initialization in every runner, overriding the
+FMU's own start values.
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["simulate_fmpy", "run_fmpy_loop", "run_libcosim", "open_fmpy_slave", "variable_refs"]
+__all__ = ["simulate_fmpy", "run_fmpy_loop", "run_libcosim", "open_fmpy_slave", "set_values", "variable_refs"]
 
 
 def variable_refs(fmu) -> dict[str, tuple[int, str]]:
@@ -54,13 +58,15 @@ def simulate_fmpy(fmu, signals: dict, outputs: list[str], *, start_values: dict 
     return {name: np.array(res[name]) for name in ["time", *outputs]}
 
 
-def open_fmpy_slave(fmu, *, instance_name="instance", logger=None, logging_on=False):
+def open_fmpy_slave(fmu, *, instance_name="instance", logger=None, logging_on=False, start_values=None):
     """Extract, instantiate and initialise `fmu` with fmpy's FMU2Slave.
 
     Parameters
     ----------
     logger : callable, optional
         ``logger(status: int, category: str, message: str)`` receiving the FMU's log messages.
+    start_values : dict, optional
+        Values set after instantiation, before initialization.
 
     Returns
     -------
@@ -96,9 +102,28 @@ def open_fmpy_slave(fmu, *, instance_name="instance", logger=None, logging_on=Fa
         addLoggerProxy(ctypes.byref(callbacks))
     slave.instantiate(callbacks=callbacks, loggingOn=logging_on or logger is not None)
     slave.setupExperiment(startTime=0.0)
+    if start_values:
+        set_values(slave, variable_refs(fmu), start_values)
     slave.enterInitializationMode()
     slave.exitInitializationMode()
     return slave
+
+
+def set_values(slave, refs: dict, values: dict) -> None:
+    """Set Real and Boolean variables of an fmpy slave by name, one call per type.
+
+    Parameters
+    ----------
+    refs : dict
+        :func:`variable_refs` of the FMU.
+    values : dict
+        ``{name: value}``.
+    """
+    reals, bools = _split(refs, list(values))
+    if reals:
+        slave.setReal([refs[n][0] for n in reals], [float(values[n]) for n in reals])
+    if bools:
+        slave.setBoolean([refs[n][0] for n in bools], [bool(values[n]) for n in bools])
 
 
 def _split(refs, names):
@@ -110,14 +135,14 @@ def _split(refs, names):
     return reals, bools
 
 
-def run_fmpy_loop(fmu, signals: dict, outputs: list[str]) -> dict:
+def run_fmpy_loop(fmu, signals: dict, outputs: list[str], *, start_values: dict | None = None) -> dict:
     """Bare FMU2Slave loop: set inputs of row k, doStep(t_k, h), read outputs (N rows)."""
     t, h = _grid(signals)
     refs = variable_refs(fmu)
     inputs = [n for n in signals if n != "time"]
     in_vrs = [refs[n][0] for n in inputs]
     reals, bools = _split(refs, outputs)
-    slave = open_fmpy_slave(fmu)
+    slave = open_fmpy_slave(fmu, start_values=start_values)
     out = {n: np.empty(t.size - 1, dtype=bool if n in bools else float) for n in outputs}
     try:
         for k in range(t.size - 1):
@@ -134,11 +159,12 @@ def run_fmpy_loop(fmu, signals: dict, outputs: list[str]) -> dict:
     return out
 
 
-def run_libcosim(fmu, signals: dict, outputs: list[str]) -> dict:
+def run_libcosim(fmu, signals: dict, outputs: list[str], *, start_values: dict | None = None) -> dict:
     """The loop of :func:`run_fmpy_loop` in the Open Simulation Platform engine (libcosimpy).
 
     The inputs are applied with an override manipulator before each step and
-    the outputs read with a last-value observer after it.  Sets libcosim's
+    the outputs read with a last-value observer after it; `start_values` are
+    libcosim initial values.  Sets libcosim's
     (process-wide) log level to warning.
 
     Raises
@@ -167,6 +193,14 @@ def run_libcosim(fmu, signals: dict, outputs: list[str]) -> dict:
     index = execution.add_local_slave(slave)
     if index < 0:
         raise RuntimeError(f"libcosim could not load {fmu}")
+    start_values = start_values or {}
+    start_reals, start_bools = _split(refs, list(start_values))
+    for n in start_reals:
+        if not execution.real_initial_value(index, refs[n][0], float(start_values[n])):
+            raise RuntimeError(f"libcosim refused the initial value of {n}")
+    for n in start_bools:
+        if not execution.boolean_initial_value(index, refs[n][0], bool(start_values[n])):
+            raise RuntimeError(f"libcosim refused the initial value of {n}")
     observer = CosimObserver.create_last_value()
     manipulator = CosimManipulator.create_override()
     execution.add_observer(observer)

@@ -20,6 +20,7 @@ SI_UNITS: dict[str, dict[str, int]] = {
     "N": {"kg": 1, "m": 1, "s": -2},
     "N/m": {"kg": 1, "s": -2},
     "N.s/m": {"kg": 1, "s": -1},
+    "rad": {"rad": 1},
     "rad/s": {"rad": 1, "s": -1},
 }
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from ._files import atomic_write_bytes
 
-__all__ = ["figure", "save_png", "png_bytes", "plot_decay", "plot_log_peaks", "plot_comparison"]
+__all__ = ["figure", "save_png", "png_bytes", "plot_decay", "plot_log_peaks", "plot_comparison", "plot_diagnosis"]
 
 
 def figure(nrows=1, ncols=1, *, size=(9.0, 4.0), **kwargs):
@@ -104,4 +104,30 @@ def plot_comparison(cmp, *, title: str | None = None):
     ax_r.set_xlabel("time / s")
     ax_r.set_ylabel("sim − meas / (m/s²)")
     ax_r.grid(alpha=0.3)
+    return fig
+
+
+def plot_diagnosis(diag, *, nrmse_before=None, nrmse_after=None, title: str | None = None):
+    """Measured vs point-contact and extended models, the residuals, and the effects named."""
+    pb = diag.problem
+    t = pb.rec.time_s
+    w = pb.window
+    fig, (ax, ax_r) = figure(2, 1, size=(10.0, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.4]})
+    before = diag.baseline.nrmse if nrmse_before is None else nrmse_before
+    after = diag.final.nrmse if nrmse_after is None else nrmse_after
+    label = " + ".join(diag.effects) or "none"
+    ax.plot(t[w], pb.measured[w], color="C0", lw=1.0, label="measured (low-pass)")
+    ax.plot(t[w], diag.baseline.prediction[w], color="C7", lw=0.9, ls="--",
+            label=f"point contact, NRMSE {before:.1%}")
+    ax.plot(t[w], diag.final.prediction[w], color="C3", lw=0.9, label=f"extended ({label}), NRMSE {after:.1%}")
+    ax.set_ylabel("hub acceleration / (m/s²)")
+    ax.set_title(title or f"{pb.tire}: effects found: {label}")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper right")
+    ax_r.plot(t[w], (diag.baseline.prediction - pb.measured)[w], color="C7", lw=0.7, label="point contact − measured")
+    ax_r.plot(t[w], (diag.final.prediction - pb.measured)[w], color="C3", lw=0.7, label="extended − measured")
+    ax_r.set_xlabel("time / s")
+    ax_r.set_ylabel("residual / (m/s²)")
+    ax_r.grid(alpha=0.3)
+    ax_r.legend(fontsize=8, loc="upper right")
     return fig

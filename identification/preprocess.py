@@ -229,7 +229,8 @@ def _onset(absx: np.ndarray, start: int, stop: int, floor: float, source, tire: 
     return i, peak
 
 
-def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ) -> dict[str, TireSignal]:
+def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ,
+               min_peaks: int = 3) -> dict[str, TireSignal]:
     """Filter each channel, find its impact and its successive free-vibration peaks.
 
     Parameters
@@ -239,6 +240,9 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
         Channels to analyse (default: all in the recording).
     cutoff_hz : float
         Low-pass cut-off, Hz (the paper: 100 Hz).
+    min_peaks : int
+        Fewest free-vibration peaks accepted (the paper's method needs 3; the
+        diagnosis, which fits waveforms, accepts fewer).
 
     Returns
     -------
@@ -317,11 +321,11 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
             window_end = min(t[-1] - guard, t_imp + delay - guard)
         else:
             window_end = t[-1] - guard
-        out[name] = _free_peaks(rec, name, x, t_imp, free_start, window_end, noise[name], cutoff_hz)
+        out[name] = _free_peaks(rec, name, x, t_imp, free_start, window_end, noise[name], cutoff_hz, min_peaks)
     return out
 
 
-def _free_peaks(rec, name, x, t_imp, free_start, window_end, sigma, cutoff_hz) -> TireSignal:
+def _free_peaks(rec, name, x, t_imp, free_start, window_end, sigma, cutoff_hz, min_peaks=3) -> TireSignal:
     src, t, fs = rec.source, rec.time_s, rec.sample_rate_hz
     a = int(np.searchsorted(t, free_start))
     b = int(np.searchsorted(t, window_end, side="right"))
@@ -345,8 +349,8 @@ def _free_peaks(rec, name, x, t_imp, free_start, window_end, sigma, cutoff_hz) -
         if not (0.65 * period <= (j - keep[-1]) / fs <= 1.35 * period):
             break
         keep.append(j)
-    if len(keep) < 3:
-        raise InputError(src, f"channel {name}: fewer than 3 free-vibration peaks above the noise "
+    if len(keep) < min_peaks:
+        raise InputError(src, f"channel {name}: fewer than {min_peaks} free-vibration peaks above the noise "
                               f"(found {len(keep)} between {free_start:.3f} s and {window_end:.3f} s)")
     keep = np.asarray(keep, dtype=int) + a
     half = int(round(0.15 * fs / f_dom))

@@ -19,6 +19,24 @@ arrays alike (plain arithmetic and comparisons only).
 Options (keyword-only, default = the law above) are the extension points: a
 new behaviour is added as a new value of an option, never by changing what the
 default does.  Today ``contact="bilateral"`` is the only value.
+
+Extended tire (:func:`extended_tire`, scalar floats; every option's default
+reduces it to the point-contact law above):
+
+* **footprint** (``enveloping``): a built-in rectangular cleat (leading edge at
+  ``cleat_x``, height H, width w) is averaged over a uniform footprint of
+  length ℓ centred on the hub's longitudinal position x - the fixed-footprint
+  model - so the tire needs x and ẋ, not the road under its contact point:
+  r = H · overlap([x − ℓ/2, x + ℓ/2], [x_c, x_c + w]) / ℓ, ṙ = dr/dx · ẋ;
+* **lugs** (``periodic_disturbance``): road-equivalent lug passing
+  A sin(2π x / p + φ);
+* **progressive stiffness** (``nonlinear_stiffness``): elastic force
+  W sign(δ) |δ/δ_W|ⁿ with δ_W = n W / k, so that k stays the tangent stiffness
+  at the static load W;
+* **friction** (``friction_damping``): F_c tanh(δ̇ / v_f), a regularised
+  Coulomb force;
+* **unilateral contact** (``lift_off``): the force is zero unless δ > 0 and the
+  sum above is > 0 (the tire never pulls).
 """
 
 from __future__ import annotations
@@ -28,6 +46,8 @@ import math
 __all__ = [
     "CONTACT_MODES", "deflection_m", "deflection_rate_m_s", "force_n", "in_contact",
     "point_contact", "parameter_problem", "value_problem",
+    "EXTENDED_DEFAULTS", "footprint_cleat", "lug_road", "elastic_force", "extended_tire",
+    "extended_parameter_problem", "extended_force_fn",
 ]
 
 #: Accepted values of the ``contact`` option of :func:`point_contact`.
@@ -171,3 +191,172 @@ def value_problem(name, unit, value, *, strictly_positive):
     if not strictly_positive and not value >= 0:
         return f"{name} must be >= 0 {unit}, got {value!r} {unit}"
     return None
+
+
+# ----------------------------------------------------------------------------- extended tire
+
+#: Parameters of :func:`extended_tire` and their defaults (SI units); the
+#: defaults reduce it to the bilateral point-contact law.
+EXTENDED_DEFAULTS = {
+    "stiffness": 400000.0,          # k, N/m (tangent at the static load)
+    "damping": 2000.0,              # c, N s/m
+    "unloaded_radius": 0.75,        # r0, m
+    "footprint_length": 0.0,        # ℓ, m (0: the built-in cleat is felt under the contact point)
+    "cleat_x": 0.0,                 # leading edge of the built-in cleat, m (longitudinal)
+    "cleat_height": 0.0,            # H, m (0: no built-in cleat)
+    "cleat_width": 0.1,             # w, m
+    "unilateral": False,            # contact can only push
+    "stiffness_exponent": 1.0,      # n
+    "static_load": 0.0,             # W, N (needed when n != 1)
+    "friction_force": 0.0,          # F_c, N
+    "friction_velocity": 0.01,      # v_f, m/s
+    "lug_amplitude": 0.0,           # A, m
+    "lug_pitch": 0.25,              # p, m
+    "lug_phase": 0.0,               # φ, rad
+}
+
+
+def footprint_cleat(hub_x_m, footprint_m, cleat_x_m, cleat_height_m, cleat_width_m):
+    """Built-in cleat seen by the tire at longitudinal position x: height (m) and slope dr/dx (-).
+
+    With a footprint ℓ > 0 the cleat height is averaged over [x − ℓ/2, x + ℓ/2]
+    (uniform contact pressure); with ℓ = 0 it is the height under the contact
+    point, a rectangular pulse whose slope is zero except at its edges (where
+    it is a step the importer must treat as such).
+    """
+    h, w, xc = cleat_height_m, cleat_width_m, cleat_x_m
+    if h == 0.0:
+        return 0.0, 0.0
+    if footprint_m <= 0.0:
+        return (h if xc <= hub_x_m < xc + w else 0.0), 0.0
+    lo, hi = hub_x_m - 0.5 * footprint_m, hub_x_m + 0.5 * footprint_m
+    left, right = max(lo, xc), min(hi, xc + w)
+    if right <= left:
+        return 0.0, 0.0
+    slope = ((1.0 if hi < xc + w else 0.0) - (1.0 if lo > xc else 0.0)) * h / footprint_m
+    return h * (right - left) / footprint_m, slope
+
+
+def lug_road(hub_x_m, amplitude_m, pitch_m, phase_rad):
+    """Road-equivalent lug passing A sin(2π x / p + φ): height (m) and slope dr/dx (-)."""
+    if amplitude_m == 0.0:
+        return 0.0, 0.0
+    k = 2.0 * math.pi / pitch_m
+    arg = k * hub_x_m + phase_rad
+    return amplitude_m * math.sin(arg), amplitude_m * k * math.cos(arg)
+
+
+def elastic_force(deflection, stiffness_n_m, exponent=1.0, static_load_n=0.0):
+    """Elastic tire force, N: k δ, or W sign(δ) |δ/δ_W|ⁿ with δ_W = n W / k (tangent k at W)."""
+    if exponent == 1.0:
+        return stiffness_n_m * deflection
+    ratio = deflection * stiffness_n_m / (exponent * static_load_n)
+    return math.copysign(static_load_n * abs(ratio) ** exponent, ratio)
+
+
+def extended_tire(hub_z_m, hub_vz_m_s, hub_x_m, hub_vx_m_s, road_z_m, road_vz_m_s, p):
+    """The extended tire for given hub and road motion (scalars).
+
+    Parameters
+    ----------
+    hub_z_m, hub_vz_m_s : float
+        Hub height (m) and vertical velocity (m/s).
+    hub_x_m, hub_vx_m_s : float
+        Hub longitudinal position (m) and velocity (m/s), for the built-in cleat and the lugs.
+    road_z_m, road_vz_m_s : float
+        Road height (m) and rate (m/s) under the contact point, besides the built-in cleat.
+    p : mapping
+        Parameters named as in :data:`EXTENDED_DEFAULTS`.
+
+    Returns
+    -------
+    force : float
+        Vertical tire force, N, compressive positive.
+    deflection, deflection_rate : float
+        δ (m) and δ̇ (m/s), including the built-in cleat and the lugs.
+    contact : bool
+        The tire carries load (unilateral), or δ > 0 (bilateral).
+    road_total : float
+        Effective road height under the tire, m.
+    """
+    cleat, cleat_slope = footprint_cleat(hub_x_m, p["footprint_length"], p["cleat_x"], p["cleat_height"],
+                                         p["cleat_width"])
+    lug, lug_slope = lug_road(hub_x_m, p["lug_amplitude"], p["lug_pitch"], p["lug_phase"])
+    road = road_z_m + cleat + lug
+    d = p["unloaded_radius"] - (hub_z_m - road)
+    dd = road_vz_m_s + (cleat_slope + lug_slope) * hub_vx_m_s - hub_vz_m_s
+    f = elastic_force(d, p["stiffness"], p["stiffness_exponent"], p["static_load"]) + p["damping"] * dd
+    if p["friction_force"]:
+        f += p["friction_force"] * math.tanh(dd / p["friction_velocity"])
+    if p["unilateral"]:
+        contact = d > 0.0 and f > 0.0
+        if not contact:
+            f = 0.0
+    else:
+        contact = d > 0.0
+    return f, d, dd, contact, road
+
+
+def extended_parameter_problem(p):
+    """Why an extended parameter set is invalid, or None."""
+    problem = parameter_problem(p["stiffness"], p["damping"], p["unloaded_radius"])
+    if problem is not None:
+        return problem
+    checks = (("footprint_length", "m", False), ("cleat_height", "m", False), ("cleat_width", "m", True),
+              ("stiffness_exponent", "-", True), ("static_load", "N", False), ("friction_force", "N", False),
+              ("friction_velocity", "m/s", True), ("lug_pitch", "m", True))
+    for name, unit, strictly in checks:
+        problem = value_problem(name, unit, p[name], strictly_positive=strictly)
+        if problem is not None:
+            return problem
+    for name, unit in (("cleat_x", "m"), ("lug_amplitude", "m"), ("lug_phase", "rad")):
+        problem = value_problem(name, unit, abs(p[name]) if isinstance(p[name], (int, float)) else p[name],
+                                strictly_positive=False)
+        if problem is not None:
+            return problem
+    if p["stiffness_exponent"] != 1.0 and not p["static_load"] > 0:
+        return "static_load must be > 0 N when stiffness_exponent != 1"
+    if not isinstance(p["unilateral"], bool):
+        return f"unilateral must be a Boolean, got {p['unilateral']!r}"
+    return None
+
+
+def extended_force_fn(p):
+    """A fast force-only callback ``f(hub_z, hub_vz, hub_x, hub_vx, road_z, road_vz) -> N`` for `p`.
+
+    The options are resolved once, so each call runs only the code of the
+    options in use; every term is computed with the same operations, in the
+    same order, as in :func:`extended_tire`, so the results are bit-identical
+    (tested).
+    """
+    k, c, r0 = float(p["stiffness"]), float(p["damping"]), float(p["unloaded_radius"])
+    fp, xc, hc, wc = p["footprint_length"], p["cleat_x"], p["cleat_height"], p["cleat_width"]
+    n, w_load = p["stiffness_exponent"], p["static_load"]
+    fc, vf = p["friction_force"], p["friction_velocity"]
+    la, lp, lph = p["lug_amplitude"], p["lug_pitch"], p["lug_phase"]
+    unilateral = bool(p["unilateral"])
+    use_cleat = hc != 0.0
+    use_lug = la != 0.0
+    linear = n == 1.0
+    tanh = math.tanh
+
+    def force(hub_z, hub_vz, hub_x, hub_vx, road_z, road_vz):
+        if use_cleat:
+            cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc)
+        else:
+            cleat, cleat_slope = 0.0, 0.0
+        if use_lug:
+            lug, lug_slope = lug_road(hub_x, la, lp, lph)
+        else:
+            lug, lug_slope = 0.0, 0.0
+        road = road_z + cleat + lug
+        d = r0 - (hub_z - road)
+        dd = road_vz + (cleat_slope + lug_slope) * hub_vx - hub_vz
+        f = (k * d if linear else elastic_force(d, k, n, w_load)) + c * dd
+        if fc:
+            f += fc * tanh(dd / vf)
+        if unilateral and not (d > 0.0 and f > 0.0):
+            return 0.0
+        return f
+
+    return force

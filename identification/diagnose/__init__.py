@@ -1,0 +1,1 @@
+"""Diagnosis: find what the point-contact model misses, extend it, measure the gain."""
