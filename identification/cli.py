@@ -23,7 +23,7 @@ __all__ = ["main", "build_parser"]
 #: Modules that add a sub-command: each has ``add_parser(subparsers)``, which
 #: registers the command with ``set_defaults(func=...)``; ``func(args)``
 #: returns the exit status and raises InputError for user errors.
-_COMMAND_MODULES: list[str] = [".rig.command", ".export", ".simulate_cmd", ".diagnose.command"]
+_COMMAND_MODULES: list[str] = [".rig.command", ".export", ".simulate_cmd", ".diagnose.command", ".report_cmd"]
 
 
 def _tire_list(values: list[str] | None) -> list[str] | None:

@@ -73,6 +73,15 @@ def plot_log_peaks(ax, sig, decay_rate, *, label="measured", color="C0"):
 _WINDOW_COLORS = {"impact": "#f4c27a", "free_decay": "#bfe3bf", "other_axle": "#c9c3f0"}
 
 
+def _limit_to(ax, measured, factor=1.6):
+    """Scale the y axis to the measurement (model spikes beyond it are clipped, noted in the label)."""
+    top = factor * float(np.max(np.abs(measured))) if np.size(measured) else 1.0
+    lo, hi = ax.get_ylim()
+    if hi > top or lo < -top:
+        ax.set_ylim(-top, top)
+        ax.set_ylabel(ax.get_ylabel() + " (clipped)")
+
+
 def plot_comparison(cmp, *, title: str | None = None):
     """Measured vs co-simulated hub acceleration with both decay curves, and the residual per window."""
     fig, (ax, ax_r) = figure(2, 1, size=(10.0, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
@@ -90,6 +99,7 @@ def plot_comparison(cmp, *, title: str | None = None):
     _decay_curve(ax, sim, -cmp.decay_rate_simulated, "C3--",
                  f"simulated decay, {cmp.decay_rate_simulated:.3f} 1/s")
     ax.set_ylabel("hub acceleration / (m/s²)")
+    _limit_to(ax, cmp.measured_m_s2[sel])
     ax.set_title(title or f"{cmp.tire}: NRMSE {cmp.nrmse:.1%}, R² {cmp.r2:.3f}, "
                           f"k_FMU {cmp.k_fmu / 1e3:.1f} kN/m, c_FMU {cmp.c_fmu / 1e3:.2f} kN·s/m")
     ax.grid(alpha=0.3)
@@ -103,6 +113,7 @@ def plot_comparison(cmp, *, title: str | None = None):
     ax_r.legend(fontsize=7, loc="upper right", ncol=2)
     ax_r.set_xlabel("time / s")
     ax_r.set_ylabel("sim − meas / (m/s²)")
+    _limit_to(ax_r, cmp.measured_m_s2[sel])
     ax_r.grid(alpha=0.3)
     return fig
 
@@ -121,6 +132,7 @@ def plot_diagnosis(diag, *, nrmse_before=None, nrmse_after=None, title: str | No
             label=f"point contact, NRMSE {before:.1%}")
     ax.plot(t[w], diag.final.prediction[w], color="C3", lw=0.9, label=f"extended ({label}), NRMSE {after:.1%}")
     ax.set_ylabel("hub acceleration / (m/s²)")
+    _limit_to(ax, pb.measured[w])
     ax.set_title(title or f"{pb.tire}: effects found: {label}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper right")
@@ -128,6 +140,7 @@ def plot_diagnosis(diag, *, nrmse_before=None, nrmse_after=None, title: str | No
     ax_r.plot(t[w], (diag.final.prediction - pb.measured)[w], color="C3", lw=0.7, label="extended − measured")
     ax_r.set_xlabel("time / s")
     ax_r.set_ylabel("residual / (m/s²)")
+    _limit_to(ax_r, pb.measured[w])
     ax_r.grid(alpha=0.3)
     ax_r.legend(fontsize=8, loc="upper right")
     return fig

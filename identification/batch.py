@@ -1,0 +1,258 @@
+"""The whole chain over many recordings: identify, export, co-simulate, diagnose, extend, report.
+
+One job per tire of a recording, spread over the machine's cores:
+
+1. **identify** - the paper's method and the waveform fit (k, c with 95 % intervals);
+2. **export** - the point-contact tire FMU with the waveform values (the paper's if the fit fails);
+3. **co-simulate** - the FMU under the corner mass over the recording's cleat, against the measurement;
+4. **diagnose** - the effects the point-contact model misses, the extended model, its FMU(s), and the
+   gain measured by co-simulating them with fmpy;
+5. **figures and FMU validation** - the paper's Figure 9a/9b, the overlays before and after the
+   extension, and ``fmpy.validation.validate_fmu`` of every FMU written.
+
+A recording that cannot be read, or a tire whose stage fails, is recorded with
+its one-line error; the others go on.  Every stage's wall time is kept.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ._files import atomic_write_texts
+from .errors import InputError
+
+__all__ = ["TireReport", "RecordingReport", "BatchResult", "collect_recordings", "run_batch", "STAGES"]
+
+STAGES = ("identify", "export", "co-simulate", "diagnose", "figures", "validate")
+
+
+@dataclass
+class TireReport:
+    """Everything the report shows about one tire (picklable: numbers, text, PNG bytes)."""
+
+    recording: str
+    tire: str
+    paper: dict | None = None
+    waveform: dict | None = None
+    simulate: dict | None = None
+    diagnosis: dict | None = None
+    figures: dict = field(default_factory=dict)      # name -> PNG bytes
+    fmus: list = field(default_factory=list)         # {"file", "kind", "problems": [...]}
+    errors: list = field(default_factory=list)       # "stage: message"
+    timings: dict = field(default_factory=dict)      # stage -> s
+
+
+@dataclass
+class RecordingReport:
+    source: str
+    stem: str
+    ok: bool
+    error: str | None = None
+    speed_kmh: float | None = None
+    sample_rate_hz: float | None = None
+    tires: list = field(default_factory=list)        # TireReport, file order
+
+
+@dataclass
+class BatchResult:
+    recordings: list
+    out_dir: Path
+    seconds: float
+    timings: dict                                    # stage -> total s over all jobs
+
+    @property
+    def failures(self) -> list[str]:
+        """One line per failed recording or tire stage."""
+        out = [f"{r.source}: {r.error}" for r in self.recordings if not r.ok]
+        for r in self.recordings:
+            for t in r.tires:
+                out += [f"{r.source} {t.tire}: {e}" for e in t.errors]
+        return out
+
+
+def collect_recordings(items) -> list[Path]:
+    """The recording CSV files named by `items` (files, or folders scanned for ``*.csv``)."""
+    paths: list[Path] = []
+    for item in items:
+        p = Path(item)
+        if p.is_dir():
+            paths += sorted(q for q in p.glob("*.csv") if q.is_file())
+        elif p.exists():
+            paths.append(p)
+        else:
+            raise InputError(p, "no such file or directory")
+    if not paths:
+        raise InputError(" ".join(map(str, items)) or None, "no recording (*.csv) found")
+    return paths
+
+
+def _timed(timings: dict, stage: str):
+    class _T:
+        def __enter__(self):
+            self.t = time.perf_counter()
+
+        def __exit__(self, *exc):
+            timings[stage] = timings.get(stage, 0.0) + time.perf_counter() - self.t
+    return _T()
+
+
+def _validate(path: Path) -> list[str]:
+    from fmpy.validation import validate_fmu
+    try:
+        return [str(p) for p in validate_fmu(str(path))]
+    except Exception as exc:  # a validator crash is a validation problem to show
+        return [f"validation failed: {exc}"]
+
+
+def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireReport:
+    """Run every stage for one tire (called in a worker process)."""
+    from .export import export_fmu
+    from .identify import identify_paper
+    from .plots import plot_comparison, plot_decay, plot_diagnosis, plot_log_peaks, figure, png_bytes
+    from .preprocess import preprocess
+    from .recording import read_recording
+    from .validation import simulate_recording
+    from .waveform import identify_waveform
+    from .diagnose.command import run_diagnosis
+
+    rep = TireReport(recording=stem, tire=tire)
+    fmu_dir = Path(out_dir) / "fmu"
+    rec = read_recording(csv_path)
+    sig = None
+    with _timed(rep.timings, "identify"):
+        try:
+            sig = preprocess(rec, [tire])[tire]
+            paper = identify_paper(sig, rec.mass_kg(tire), source=rec.source)
+            rep.paper = dict(paper.to_json(), decay_rate=paper.decay_rate)
+            rep.waveform = identify_waveform(sig, rec.mass_kg(tire), source=rec.source).to_json()
+        except InputError as exc:
+            rep.errors.append(f"identify: {exc.problem}")
+    with _timed(rep.timings, "figures"):
+        if rep.paper is not None:
+            fig, (a, b) = figure(1, 2, size=(11.0, 3.8), gridspec_kw={"width_ratios": [2.2, 1]})
+            plot_decay(a, sig, rep.paper["decay_rate"])
+            a.set_title(f"{stem} {tire}: filtered acceleration, peaks and decay curve (cf. paper Fig. 9a)")
+            a.legend(fontsize=8)
+            plot_log_peaks(b, sig, rep.paper["decay_rate"])
+            b.set_title(f"ln(peaks), R² {rep.paper['r2']:.3f} (Fig. 9b)")
+            b.legend(fontsize=8)
+            rep.figures["decay"] = png_bytes(fig)
+    fmu_path = fmu_dir / f"{stem}_{tire}.fmu"
+    if rep.paper is not None:
+        with _timed(rep.timings, "export"):
+            params = {"recording": rec.source, "speed_kmh": rec.speed_kmh, "tires": {tire: rep.waveform or rep.paper}}
+            params_file = Path(out_dir) / "params" / f"{stem}_{tire}.json"
+            atomic_write_texts({params_file: json.dumps(params, indent=2) + "\n"})
+            try:
+                export_fmu(params_file, fmu_path, tire=tire)
+                rep.fmus.append({"file": f"fmu/{fmu_path.name}", "kind": "point_contact",
+                                 "role": "identified point-contact tire"})
+            except InputError as exc:
+                rep.errors.append(f"export: {exc.problem}")
+    if fmu_path.exists():
+        with _timed(rep.timings, "co-simulate"):
+            try:
+                cmp = simulate_recording(fmu_path, rec, tire, method="waveform" if rep.waveform else "paper")
+                rep.simulate = dict(cmp.to_json(), worst_window=cmp.worst_window, alignment_s=cmp.alignment_s)
+            except InputError as exc:
+                rep.errors.append(f"co-simulate: {exc.problem}")
+                cmp = None
+        if cmp is not None:
+            with _timed(rep.timings, "figures"):
+                rep.figures["comparison"] = png_bytes(plot_comparison(cmp))
+    with _timed(rep.timings, "diagnose"):
+        ext = fmu_dir / f"{stem}_{tire}_extended.fmu"
+        try:
+            diag, gain = run_diagnosis(rec, tire, fmu_path=ext, workers=1)
+            rep.diagnosis = dict(diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after),
+                                 agreement=gain.agreement, seconds=diag.seconds,
+                                 timings={k: round(v, 3) for k, v in diag.timings().items()})
+            for path in gain.fmu_paths:
+                rep.fmus.append({"file": f"fmu/{Path(path).name}", "kind": "extended_tire",
+                                 "role": "extended tire (" + (", ".join(diag.effects) or "no effect found") + ")"})
+        except (InputError, ValueError) as exc:
+            rep.errors.append(f"diagnose: {getattr(exc, 'problem', exc)}")
+            diag = None
+    if diag is not None:
+        with _timed(rep.timings, "figures"):
+            rep.figures["diagnosis"] = png_bytes(plot_diagnosis(diag, nrmse_before=gain.nrmse_before,
+                                                                nrmse_after=gain.nrmse_after))
+    with _timed(rep.timings, "validate"):
+        for entry in rep.fmus:
+            entry["problems"] = _validate(Path(out_dir) / entry["file"])
+    return rep
+
+
+def _job(args):
+    try:
+        return process_tire(*args)
+    except Exception as exc:  # a bug must not take the batch down; it is shown in the report
+        rep = TireReport(recording=args[1], tire=args[2])
+        rep.errors.append(f"internal error: {exc.__class__.__name__}: {exc}")
+        return rep
+
+
+def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = True) -> BatchResult:
+    """Process recordings into `out_dir` (fmu/, params/); the caller renders the report.
+
+    Parameters
+    ----------
+    paths : list of path-like
+        Recording CSV files.
+    out_dir : path-like
+        Output folder (created).
+    workers : int, optional
+        Processes (default: the machine's cores).
+    progress : bool
+        Progress bar on stderr (on a terminal, after one second).
+    """
+    from .recording import read_recording
+
+    t0 = time.perf_counter()
+    out_dir = Path(out_dir)
+    for sub in ("", "fmu", "params"):
+        (out_dir / sub).mkdir(parents=True, exist_ok=True)
+    reports, jobs, stems = [], [], set()
+    for path in paths:
+        stem = Path(path).stem
+        while stem in stems:
+            stem += "_"
+        stems.add(stem)
+        try:
+            rec = read_recording(path)
+        except InputError as exc:
+            reports.append(RecordingReport(source=str(path), stem=stem, ok=False, error=exc.problem))
+            continue
+        reports.append(RecordingReport(source=str(path), stem=stem, ok=True, speed_kmh=rec.speed_kmh,
+                                       sample_rate_hz=rec.sample_rate_hz))
+        jobs += [(str(path), stem, tire, str(out_dir)) for tire in rec.tires]
+    workers = max(1, min(workers or os.cpu_count() or 1, len(jobs) or 1))
+    from tqdm import tqdm
+    bar = tqdm(total=len(jobs), desc="cleatfmu", unit="tire", delay=1.0, disable=None if progress else True)
+    results = []
+    try:
+        if workers > 1:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+            with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork")) as pool:
+                for rep in pool.map(_job, jobs):
+                    results.append(rep)
+                    bar.update(1)
+        else:
+            for job in jobs:
+                results.append(_job(job))
+                bar.update(1)
+    finally:
+        bar.close()
+    by_stem = {r.stem: r for r in reports}
+    for rep in results:
+        by_stem[rep.recording].tires.append(rep)
+    totals: dict = {}
+    for rep in results:
+        for stage, sec in rep.timings.items():
+            totals[stage] = totals.get(stage, 0.0) + sec
+    return BatchResult(recordings=reports, out_dir=out_dir, seconds=time.perf_counter() - t0, timings=totals)

@@ -1,0 +1,139 @@
+"""``cleatfmu demo`` and ``cleatfmu report``: the whole chain into a self-contained HTML report."""
+
+import base64
+import fcntl
+import io
+import json
+import os
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from identification.rig import run_rig, write_run
+
+SECTIONS = ("summary", "table4", "waveform", "tires", "fmus", "timings")
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    from identification.cli import main
+    out = tmp_path_factory.mktemp("demo") / "out"
+    code = main(["demo", "--out", str(out), "--workers", "2"])
+    return code, out
+
+
+def _png(data: bytes):
+    import matplotlib.image as mpimg
+    return mpimg.imread(io.BytesIO(data), format="png")
+
+
+def test_demo_report_sections_tables_images(demo, cli):
+    code, out = demo
+    assert code == 0
+    html = (out / "report.html").read_text()
+    for section in SECTIONS:
+        assert f'<section id="{section}">' in html, section
+    for rec in ("testday_7kmh", "testday_10kmh"):
+        for tire in ("FL", "FR", "RL", "RR"):
+            assert f'id="tire-{rec}-{tire}"' in html
+    # the Table-4 rows hold what `cleatfmu identify --json` says for the same recordings
+    table = html[html.index('<section id="table4">'):html.index('<section id="waveform">')]
+    rows = re.findall(r"<tr><td>([\d.]+)</td><td class=\"l\">(\w+)</td><td class=\"l\">(\w\w)</td>"
+                      r"<td>([\d.]+)</td><td>([\d.]+)</td><td>([\d.]+)</td><td>([\d.]+)</td><td>([\d.]+)</td>"
+                      r"<td>([\d.]+)</td><td>([\d.]+)</td><td>(\d+)</td></tr>", table)
+    assert len(rows) == 8
+    for name in ("7kmh", "10kmh"):
+        doc = json.loads(cli("identify", "--example", name, "--json").out)
+        for tire, entry in doc["tires"].items():
+            row = next(r for r in rows if r[1] == f"testday_{name}" and r[2] == tire)
+            assert float(row[7]) == pytest.approx(entry["k"] / 1e3, abs=0.006)
+            assert float(row[8]) == pytest.approx(entry["c"] / 1e3, abs=0.006)
+            assert float(row[3]) == pytest.approx(entry["T"], abs=6e-4)
+    # every embedded image is a PNG that decodes to a real picture
+    images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', html)
+    assert len(images) >= 8 * 3
+    for data in images:
+        pixels = _png(base64.b64decode(data))
+        assert pixels.ndim == 3 and pixels.shape[0] > 200 and pixels.shape[1] > 400
+        assert float(pixels[..., :3].std()) > 0.05
+    assert "src=\"http" not in html and "<script" not in html   # self-contained, static
+
+
+def test_demo_fmus_are_valid_and_listed(demo):
+    from fmpy.validation import validate_fmu
+    code, out = demo
+    fmus = sorted((out / "fmu").glob("*.fmu"))
+    assert len(fmus) >= 16   # 8 point-contact + 8 extended (+ the other axle's with axle_coupling)
+    summary = json.loads((out / "summary.json").read_text())
+    listed = {f["file"] for r in summary["recordings"] for t in r["tires"].values() for f in t["fmus"]}
+    assert {f"fmu/{p.name}" for p in fmus} == listed
+    for path in fmus:
+        assert validate_fmu(str(path)) == [], path.name
+    for r in summary["recordings"]:
+        for tire, t in r["tires"].items():
+            assert t["errors"] == []
+            assert "enveloping" in t["diagnosis"]["effects"], (r["source"], tire)
+            assert t["diagnosis"]["nrmse_after"] < t["diagnosis"]["nrmse_before"] / 2
+
+
+def _chromium():
+    found = shutil.which("chromium") or shutil.which("chromium-browser")
+    if found:
+        return found
+    if os.geteuid() != 0 or not shutil.which("apt-get"):
+        pytest.skip("chromium is not installed and cannot be installed here (needs root and apt-get)")
+    with open("/tmp/cleatfmu-chromium-install.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not shutil.which("chromium"):
+            proc = subprocess.run(["bash", "-c", "apt-get update -qq && DEBIAN_FRONTEND=noninteractive "
+                                   "apt-get install -y -qq chromium"], capture_output=True, text=True, timeout=1200)
+            if not shutil.which("chromium"):
+                pytest.skip(f"chromium could not be installed: {proc.stderr.strip()[-300:]}")
+    return shutil.which("chromium")
+
+
+def test_report_renders_in_headless_chromium(demo, tmp_path):
+    code, out = demo
+    browser = _chromium()
+    shot = tmp_path / "shot.png"
+    cmd = [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+           "--disable-background-networking", "--disable-component-update", "--disable-sync",
+           f"--user-data-dir={tmp_path / 'profile'}", "--hide-scrollbars", "--window-size=1280,3000",
+           f"--screenshot={shot}", (out / "report.html").resolve().as_uri()]
+    subprocess.run(cmd, capture_output=True, timeout=180)
+    assert shot.exists(), "chromium wrote no screenshot"
+    pixels = _png(shot.read_bytes())[..., :3]
+    ink = (pixels.min(axis=2) < 0.9).mean()          # share of pixels that are not (near) white
+    colours = len(np.unique((pixels[::4, ::4] * 255).astype(np.uint8).reshape(-1, 3), axis=0))
+    assert ink > 0.03 and colours > 100, (ink, colours)
+
+
+def test_report_with_a_broken_recording(cli, tmp_path):
+    data = tmp_path / "day"
+    data.mkdir()
+    for name, effects in (("good_a", ()), ("good_b", ("enveloping",))):
+        write_run(run_rig(effects, {"sensor.channels": "FL"}, seed=4), data / name)
+    lines = (data / "good_a.csv").read_text().splitlines()
+    lines[700] = lines[700].split(",")[0] + ",abc"          # one unreadable cell
+    (data / "broken.csv").write_text("\n".join(lines) + "\n")
+    (data / "broken.json").write_text((data / "good_a.json").read_text())
+    res = cli("report", data, "-o", tmp_path / "out", "--workers", "2")
+    assert res.code == 2
+    assert "broken.csv" in res.err and "not a number" in res.err
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    by_name = {os.path.basename(r["source"]): r for r in summary["recordings"]}
+    assert by_name["broken.csv"]["ok"] is False and "abc" in by_name["broken.csv"]["error"]
+    for good in ("good_a.csv", "good_b.csv"):
+        assert by_name[good]["ok"] is True
+        assert by_name[good]["tires"]["FL"]["diagnosis"] is not None
+    assert by_name["good_b.csv"]["tires"]["FL"]["diagnosis"]["effects"] == ["enveloping"]
+    html = (tmp_path / "out" / "report.html").read_text()
+    assert "broken.csv" in html and "failed" in html
+
+
+def test_report_needs_recordings(cli, tmp_path):
+    res = cli("report", tmp_path, "-o", tmp_path / "out")
+    assert res.code == 2 and "no recording" in res.err
