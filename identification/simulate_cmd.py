@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+from .cliutil import check_output, choose_tire
 from .errors import InputError
 from .preprocess import DEFAULT_CUTOFF_HZ
 
@@ -32,15 +33,8 @@ def run(args) -> int:
     from .validation import DEFAULT_MAX_STEP_S, simulate_recording
 
     rec = read_recording(args.recording)
-    tire = args.tire
-    if tire is None:
-        if len(rec.tires) != 1:
-            raise InputError(rec.source, f"holds channels {', '.join(rec.tires)}; choose one with --tire")
-        tire = rec.tires[0]
-    if tire not in rec.accel_m_s2:
-        raise InputError(rec.source, f"tire {tire} is not in the recording (channels: {', '.join(rec.tires)})")
-    if args.plot is not None and not str(args.plot).lower().endswith(".png"):
-        raise InputError(args.plot, "the plot file name must end with .png")
+    tire = choose_tire(rec, args.tire)
+    check_output(args.plot, ".png", "plot")
     step = args.max_step_s if args.max_step_s is not None else DEFAULT_MAX_STEP_S
     if not step > 0:
         raise InputError("--max-step-s", f"must be > 0, got {step}")

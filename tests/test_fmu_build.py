@@ -4,15 +4,15 @@ from __future__ import annotations
 
 import sys
 import xml.etree.ElementTree as ET
-import zipfile
 from pathlib import Path
 
 import pytest
+from fmu_helpers import initial_unknowns, model_description, output_dependencies, packaged_modules, rewrite_fmu
 
 from build_scripts import build_fmu, kind_names, load_kind, resolve_start_values
 from build_scripts.check import main as check_main
 from build_scripts.compliance import compliance_problems
-from build_scripts.kinds import module_name_conflicts
+from build_scripts.kinds import module_name_conflicts, module_source
 from build_scripts.units import SI_UNITS
 
 EXPECTED_UNITS = {"hub_z": "m", "hub_vz": "m/s", "road_z": "m", "road_vz": "m/s", "stiffness": "N/m",
@@ -28,21 +28,14 @@ def fmu(tmp_path_factory) -> Path:
                      start_values={"stiffness": 312345.6789012345, "damping": 1234.5, "unloaded_radius": 0.8})
 
 
-def model_description(fmu) -> ET.Element:
-    return ET.fromstring(zipfile.ZipFile(fmu).read("modelDescription.xml"))
-
-
 def rewrite_model_description(fmu, dest, edit) -> Path:
     """Copy `fmu` to `dest` with ``edit(root)`` applied to its modelDescription.xml."""
-    root = model_description(fmu)
-    edit(root)
-    with zipfile.ZipFile(fmu) as zin, zipfile.ZipFile(dest, "w") as zout:
-        for info in zin.infolist():
-            data = zin.read(info)
-            if info.filename == "modelDescription.xml":
-                data = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
-            zout.writestr(info, data)
-    return dest
+    def edited(data):
+        root = ET.fromstring(data)
+        edit(root)
+        return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+    return rewrite_fmu(fmu, dest, "modelDescription.xml", edited)
 
 
 def test_validate_fmu_is_empty_and_compliance_passes(fmu):
@@ -77,15 +70,11 @@ def test_default_experiment_and_state_flags(fmu):
 
 def test_outputs_declare_direct_feedthrough_and_initial_unknowns(fmu):
     root = model_description(fmu)
-    index = {sv.get("name"): i for i, sv in enumerate(root.iter("ScalarVariable"), start=1)}
-    name = {i: n for n, i in index.items()}
-    outputs = {name[int(u.get("index"))]: u for u in root.find("ModelStructure/Outputs")}
-    force = outputs["force_z"]
-    assert {name[int(i)] for i in force.get("dependencies").split()} == {"hub_z", "hub_vz", "road_z", "road_vz"}
-    assert set(force.get("dependenciesKind").split()) == {"tunable"}
-    assert {name[int(i)] for i in outputs["deflection"].get("dependencies").split()} == {"hub_z", "road_z"}
-    initial = {name[int(u.get("index"))] for u in root.find("ModelStructure/InitialUnknowns")}
-    assert initial == {"force_z", "deflection", "deflection_rate", "in_contact"}
+    outputs = output_dependencies(root)
+    assert outputs["force_z"][0] == {"hub_z", "hub_vz", "road_z", "road_vz"}
+    assert set(outputs["force_z"][1]) == {"tunable"}
+    assert outputs["deflection"][0] == {"hub_z", "road_z"}
+    assert initial_unknowns(root) == {"force_z", "deflection", "deflection_rate", "in_contact"}
 
 
 def test_start_values_are_written_with_full_precision(fmu):
@@ -134,15 +123,16 @@ def test_compliance_check_detects_missing_units_and_structure(fmu, tmp_path):
                compliance_problems(rewrite_model_description(fmu, tmp_path / "c.fmu", drop_description)))
 
 
-def test_fmu_contains_the_law_verbatim_and_only_kind_prefixed_modules(fmu):
+def test_fmu_contains_the_law_and_shared_modules_verbatim_and_only_kind_prefixed_modules(fmu):
     import identification.tire_law as law
 
-    with zipfile.ZipFile(fmu) as z:
-        assert z.read("resources/cleatfmu_point_contact_law.py") == Path(law.__file__).read_bytes()
-        assert z.read("resources/slavemodule.txt").decode().strip() == "cleatfmu_point_contact"
-        modules = {Path(n).stem for n in z.namelist() if n.count("/") == 1 and n.endswith(".py")}
-    assert modules == {"cleatfmu_point_contact", "cleatfmu_point_contact_slave", "cleatfmu_point_contact_law",
-                       "cleatfmu_point_contact_wrapper"}
+    entry, modules = packaged_modules(fmu)
+    assert modules["cleatfmu_point_contact_law"] == Path(law.__file__).read_bytes()
+    assert modules["cleatfmu_point_contact_table"] == module_source("fmu_src.table_slave")
+    assert modules["cleatfmu_point_contact_wrapper"] == module_source("fmu_src.pythonfmu_wrapper")
+    assert entry == "cleatfmu_point_contact"
+    assert set(modules) == {"cleatfmu_point_contact", "cleatfmu_point_contact_slave", "cleatfmu_point_contact_law",
+                            "cleatfmu_point_contact_table", "cleatfmu_point_contact_wrapper"}
 
 
 def test_module_name_and_identifier_conflicts_between_kinds_are_found():

@@ -1,100 +1,23 @@
-"""The extended tire FMU: the law it runs, its options, FMI behaviour, importers, robustness, leaks."""
+"""The extended tire FMU: the law it runs, its options, its model description and start values."""
 
 from __future__ import annotations
 
-import gc
 import math
-import os
-import subprocess
-import sys
-import textwrap
-import xml.etree.ElementTree as ET
-import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
+from extended_tire_cases import (INPUTS, KIND, OPTION_SETS, OUTPUTS, REAL_OUTPUTS, REAL_PARAMS, law_outputs,
+                                 random_inputs, random_parameters, read_outputs, set_parameters)
+from fmu_helpers import initial_unknowns, kind_fixtures, model_description, output_dependencies
 
 import identification.tire_law as law
 from build_scripts import build_fmu, load_kind
 from build_scripts.compliance import compliance_problems
 from build_scripts.reference import closed_form_outputs, read_reference
-from build_scripts.runners import open_fmpy_slave, run_fmpy_loop, run_libcosim, simulate_fmpy, variable_refs
-from test_fmu_point_contact import _fresh_cycle, rss_bytes
-
-KIND = "extended_tire"
-INPUTS = ["hub_z", "hub_vz", "road_z", "road_vz", "hub_x", "hub_vx"]
-REAL_PARAMS = [n for n in law.EXTENDED_DEFAULTS if n != "unilateral"]
-REAL_OUTPUTS = ["force_z", "deflection", "deflection_rate", "road_effective_z"]
-OUTPUTS = REAL_OUTPUTS + ["in_contact"]
-OPTION_SETS = [("footprint",), ("point_cleat",), ("unilateral",), ("progressive",), ("friction",), ("lugs",),
-               ("footprint", "unilateral", "progressive", "friction", "lugs")]
+from build_scripts.runners import open_fmpy_slave, variable_refs
 
 
-@pytest.fixture(scope="module")
-def fmu(tmp_path_factory) -> Path:
-    """The extended tire FMU with the kind's default start values, built once."""
-    return build_fmu(KIND, tmp_path_factory.mktemp("extended") / "extended_tire.fmu")
-
-
-@pytest.fixture(scope="module")
-def vr(fmu) -> dict:
-    return {name: ref for name, (ref, _type) in variable_refs(fmu).items()}
-
-
-@pytest.fixture
-def slave(fmu):
-    """An initialised instance with a logger; yields (slave, messages)."""
-    messages = []
-    s = open_fmpy_slave(fmu, logger=lambda status, category, message: messages.append((status, message)))
-    yield s, messages
-    s.terminate()
-    s.freeInstance()
-
-
-def random_parameters(rng, options) -> dict:
-    """A valid parameter set with random k, c, r0 and the given options switched on."""
-    p = dict(law.EXTENDED_DEFAULTS, stiffness=rng.uniform(1e5, 1.5e6), damping=rng.uniform(0.0, 2e4),
-             unloaded_radius=rng.uniform(0.4, 1.0))
-    if "footprint" in options or "point_cleat" in options:
-        p.update(footprint_length=rng.uniform(0.05, 0.5) if "footprint" in options else 0.0,
-                 cleat_x=rng.uniform(-1.0, 1.0), cleat_height=rng.uniform(0.01, 0.08),
-                 cleat_width=rng.uniform(0.02, 0.3))
-    if "unilateral" in options:
-        p["unilateral"] = True
-    if "progressive" in options:
-        p.update(stiffness_exponent=rng.uniform(0.6, 2.0), static_load=rng.uniform(5e3, 4e4))
-    if "friction" in options:
-        p.update(friction_force=rng.uniform(10.0, 2000.0), friction_velocity=rng.uniform(0.001, 0.2))
-    if "lugs" in options:
-        p.update(lug_amplitude=rng.uniform(-0.005, 0.005), lug_pitch=rng.uniform(0.1, 0.5),
-                 lug_phase=rng.uniform(-math.pi, math.pi))
-    assert law.extended_parameter_problem(p) is None
-    return p
-
-
-def random_inputs(rng, p) -> list[float]:
-    return [p["unloaded_radius"] + rng.uniform(-0.08, 0.03), rng.uniform(-2.0, 2.0), rng.uniform(-0.02, 0.04),
-            rng.uniform(-1.0, 1.0), p["cleat_x"] + rng.uniform(-0.6, 0.9), rng.uniform(-4.0, 4.0)]
-
-
-def set_parameters(s, vr, p) -> None:
-    s.setReal([vr[n] for n in REAL_PARAMS], [float(p[n]) for n in REAL_PARAMS])
-    s.setBoolean([vr["unilateral"]], [p["unilateral"]])
-
-
-def read_outputs(s, vr) -> tuple:
-    return (*s.getReal([vr[n] for n in REAL_OUTPUTS]), bool(s.getBoolean([vr["in_contact"]])[0]))
-
-
-def law_outputs(u, p) -> tuple:
-    """tire_law.extended_tire in the FMU's output order."""
-    force, deflection, rate, contact, road = law.extended_tire(u[0], u[1], u[4], u[5], u[2], u[3], p)
-    return force, deflection, rate, road, contact
-
-
-def model_description(fmu) -> ET.Element:
-    return ET.fromstring(zipfile.ZipFile(fmu).read("modelDescription.xml"))
+fmu, vr, slave = kind_fixtures(KIND)
 
 
 # -- the law ------------------------------------------------------------------------------------
@@ -274,12 +197,9 @@ def test_compliance_units_descriptions_and_experiment(fmu):
 
 def test_model_structure_lists_exactly_the_inputs_each_output_depends_on(fmu):
     root = model_description(fmu)
-    name = {i: sv.get("name") for i, sv in enumerate(root.iter("ScalarVariable"), start=1)}
-    outputs = {name[int(u.get("index"))]: u for u in root.find("ModelStructure/Outputs")}
-    declared = {out: {name[int(i)] for i in u.get("dependencies", "").split()} for out, u in outputs.items()}
+    declared = {out: names for out, (names, _kinds) in output_dependencies(root).items()}
     assert declared == EXPECTED_INPUT_DEPENDENCIES
-    initial = {name[int(u.get("index"))] for u in root.find("ModelStructure/InitialUnknowns")}
-    assert initial == set(OUTPUTS)
+    assert initial_unknowns(root) == set(OUTPUTS)
 
 
 def test_declared_dependencies_hold_numerically(slave, vr):
@@ -342,257 +262,3 @@ def test_build_rejects_invalid_start_values(tmp_path, starts, match):
     with pytest.raises(ValueError, match=match):
         build_fmu(KIND, tmp_path / "bad.fmu", start_values=starts)
     assert list(tmp_path.iterdir()) == []
-
-
-# -- importers ----------------------------------------------------------------------------------
-
-def test_default_experiment_with_fmpy_and_libcosimpy_matches_the_reference(fmu):
-    kind = load_kind(KIND)
-    ref = read_reference(KIND)
-    signals = {n: ref[n] for n in ["time", *INPUTS]}
-    starts = kind.reference_start_values
-    sim = simulate_fmpy(fmu, signals, OUTPUTS, start_values=starts)
-    for name in ["time", *REAL_OUTPUTS]:
-        np.testing.assert_allclose(sim[name], ref[name], rtol=kind.reference_rtol, atol=kind.reference_atol)
-    assert np.array_equal(sim["in_contact"], ref["in_contact"])
-    fmpy_out = run_fmpy_loop(fmu, signals, OUTPUTS, start_values=starts)
-    cosim_out = run_libcosim(fmu, signals, OUTPUTS, start_values=starts)
-    for name in OUTPUTS:
-        assert np.array_equal(cosim_out[name], fmpy_out[name]), name
-        assert np.array_equal(cosim_out[name], ref[name][1:]), name  # = fmpy.simulate_fmu, one row later
-
-
-def test_two_fmus_of_the_kind_keep_their_own_parameters(fmu, tmp_path, vr):
-    other_p = {**law.EXTENDED_DEFAULTS, "stiffness": 123456.0, "unilateral": True, "footprint_length": 0.2,
-               "cleat_x": 0.1, "cleat_height": 0.03}
-    other = build_fmu(KIND, tmp_path / "FR.fmu", start_values={n: other_p[n] for n in
-                                                               ("stiffness", "unilateral", "footprint_length",
-                                                                "cleat_x", "cleat_height")})
-    a, b = open_fmpy_slave(fmu, instance_name="a"), open_fmpy_slave(other, instance_name="b")
-    try:
-        u = [0.76, -0.1, 0.0, 0.0, 0.15, 2.0]
-        for s in (a, b):
-            s.setReal([vr[n] for n in INPUTS], u)
-        assert read_outputs(a, vr) == law_outputs(u, law.EXTENDED_DEFAULTS)  # bilateral: pulls
-        assert read_outputs(b, vr) == law_outputs(u, other_p)
-        assert read_outputs(a, vr)[0] < 0 and read_outputs(b, vr)[-1] is True
-        assert a.getBoolean([vr["unilateral"]]) == [0] and b.getBoolean([vr["unilateral"]]) == [1]
-    finally:
-        a.freeInstance()
-        b.freeInstance()
-
-
-# -- FMU state and reset ------------------------------------------------------------------------
-
-def test_state_round_trip_is_bit_identical_and_carries_the_parameters(fmu, vr):
-    rng = np.random.default_rng(3)
-    p = random_parameters(rng, OPTION_SETS[-1])
-    inputs = [random_inputs(rng, p) for _ in range(60)]
-
-    def run(s):
-        out = []
-        for i, u in enumerate(inputs):
-            s.setReal([vr[n] for n in INPUTS], u)
-            s.doStep(i * 1e-3, 1e-3)
-            out.append(read_outputs(s, vr))
-        return out
-
-    s, t = open_fmpy_slave(fmu), open_fmpy_slave(fmu, instance_name="copy")
-    try:
-        set_parameters(s, vr, p)
-        s.setReal([vr[n] for n in INPUTS], inputs[0])
-        state = s.getFMUstate()
-        first = run(s)
-        assert first == [law_outputs(u, p) for u in inputs]
-        s.setFMUstate(state)
-        assert s.getReal([vr[n] for n in INPUTS]) == inputs[0]
-        assert run(s) == first
-        blob = s.serializeFMUstate(state)
-        s.freeFMUstate(state)
-        copy = t.deSerializeFMUstate(blob)  # t starts with the default (bilateral, linear) parameters
-        t.setFMUstate(copy)
-        t.freeFMUstate(copy)
-        assert t.getBoolean([vr["unilateral"]]) == [1]
-        assert run(t) == first
-    finally:
-        s.freeInstance()
-        t.freeInstance()
-
-
-def test_reset_returns_to_the_start_values(slave, vr):
-    s, _ = slave
-    names = INPUTS + REAL_PARAMS
-    before = s.getReal([vr[n] for n in names + REAL_OUTPUTS]), s.getBoolean([vr["unilateral"], vr["in_contact"]])
-    set_parameters(s, vr, random_parameters(np.random.default_rng(1), OPTION_SETS[-1]))
-    s.setReal([vr[n] for n in INPUTS], [0.6, 1.0, 0.1, -1.0, 0.3, 2.0])
-    assert (s.getReal([vr[n] for n in names + REAL_OUTPUTS]),
-            s.getBoolean([vr["unilateral"], vr["in_contact"]])) != before
-    s.reset()
-    assert (s.getReal([vr[n] for n in names + REAL_OUTPUTS]), s.getBoolean([vr["unilateral"], vr["in_contact"]])) \
-        == before
-    s.setupExperiment(startTime=0.0)
-    s.enterInitializationMode()
-    s.exitInitializationMode()
-    s.doStep(0.0, 1e-3)
-
-
-# -- robustness ---------------------------------------------------------------------------------
-
-@pytest.mark.parametrize("name, value, reason", [
-    ("stiffness", 0.0, "stiffness k must be > 0"), ("damping", -1.0, "damping c must be >= 0"),
-    ("footprint_length", -0.1, "footprint_length must be >= 0"), ("cleat_height", -0.01, "cleat_height must be >= 0"),
-    ("cleat_width", 0.0, "cleat_width must be > 0"), ("stiffness_exponent", 0.0, "stiffness_exponent must be > 0"),
-    ("static_load", -1.0, "static_load must be >= 0"), ("friction_force", -5.0, "friction_force must be >= 0"),
-    ("friction_velocity", 0.0, "friction_velocity must be > 0"), ("lug_pitch", -0.25, "lug_pitch must be > 0"),
-    ("cleat_x", math.nan, "cleat_x = nan"), ("lug_phase", math.inf, "lug_phase = inf"),
-    ("hub_x", math.nan, "hub_x = nan"), ("hub_vx", -math.inf, "hub_vx = -inf"), ("road_z", math.nan, "road_z = nan"),
-])
-def test_invalid_values_give_an_error_status_with_the_reason(slave, vr, name, value, reason):
-    from fmpy.fmi1 import FMICallException
-
-    s, messages = slave
-    before = s.getReal([vr[n] for n in INPUTS + REAL_PARAMS])
-    with pytest.raises(FMICallException) as info:
-        s.setReal([vr[name]], [value])
-    assert info.value.status >= 3  # fmi2Error or fmi2Fatal (pythonfmu 0.7 reports every failure as fatal)
-    assert any(status == 3 and reason in message for status, message in messages), messages
-    assert s.getReal([vr[n] for n in INPUTS + REAL_PARAMS]) == before  # nothing was stored
-    s.doStep(0.0, 1e-3)
-
-
-def test_parameters_may_be_set_in_any_order_but_an_inconsistent_set_fails_when_used(slave, vr):
-    from fmpy.fmi1 import FMICallException
-
-    s, messages = slave
-    s.setReal([vr[n] for n in INPUTS], [0.72, -0.1, 0.0, 0.0, 0.0, 0.0])
-    s.setReal([vr["stiffness_exponent"]], [1.5])  # static_load is still 0 N: accepted for now
-    for call in (lambda: s.getReal([vr["force_z"]]), lambda: s.getBoolean([vr["in_contact"]]),
-                 lambda: s.doStep(0.0, 1e-3)):
-        with pytest.raises(FMICallException):
-            call()
-    assert sum(status == 3 and "static_load must be > 0 N when stiffness_exponent != 1" in m
-               for status, m in messages) == 3
-    s.setReal([vr["static_load"]], [20000.0])
-    s.doStep(0.0, 1e-3)
-    u = s.getReal([vr[n] for n in INPUTS])
-    p = {**law.EXTENDED_DEFAULTS, "stiffness_exponent": 1.5, "static_load": 20000.0}
-    assert s.getReal([vr["force_z"]])[0] == law_outputs(u, p)[0]
-    s.reset()
-    s.setupExperiment(startTime=0.0)
-    s.setReal([vr["stiffness_exponent"]], [1.5])
-    s.enterInitializationMode()
-    with pytest.raises(FMICallException):
-        s.exitInitializationMode()
-    assert sum("static_load must be > 0 N" in m for _, m in messages) == 4
-
-
-def test_unevaluable_inputs_and_wrong_references_fail_with_a_reason(slave, vr):
-    from fmpy.fmi1 import FMICallException
-
-    s, messages = slave
-    s.setReal([vr["stiffness_exponent"], vr["static_load"]], [2.0, 10000.0])
-    s.setReal([vr["hub_z"]], [-1e200])  # finite, but (δ/δ_W)^n overflows
-    with pytest.raises(FMICallException):
-        s.getReal([vr["force_z"]])
-    assert any(status == 3 and "cannot be evaluated" in m for status, m in messages), messages
-    s.setReal([vr["hub_z"]], [0.7])
-    assert s.getReal([vr["force_z"]])[0] > 0
-    for call in (lambda: s.setBoolean([vr["in_contact"]], [True]), lambda: s.setReal([vr["unilateral"]], [1.0]),
-                 lambda: s.setBoolean([vr["stiffness"]], [True]), lambda: s.getReal([vr["in_contact"]]),
-                 lambda: s.setFMUstate(s.deSerializeFMUstate(b"not a state"))):
-        with pytest.raises(FMICallException):
-            call()
-    assert sum(status == 3 for status, _ in messages) == 6
-
-
-def test_host_survives_repeated_errors_and_frees_cleanly(fmu):
-    """Run in a child process, so that a crash shows as a failed test, not a dead test session."""
-    script = textwrap.dedent(f"""
-        import gc, math
-        from fmpy.fmi1 import FMICallException
-        from build_scripts.runners import open_fmpy_slave, variable_refs
-        vr = {{n: r for n, (r, _) in variable_refs({str(fmu)!r}).items()}}
-        calls = [
-            lambda s: s.setReal([vr["cleat_width"]], [math.nan]),
-            lambda s: s.setReal([vr["friction_velocity"]], [0.0]),
-            lambda s: s.setBoolean([vr["in_contact"]], [True]),
-            lambda s: (s.setReal([vr["stiffness_exponent"]], [1.5]), s.doStep(0.0, 1e-3)),
-            lambda s: (s.setReal([vr["hub_z"]], [-1e304]), s.getReal([vr["force_z"]])),  # force overflows
-        ]
-        for round in range(3):
-            s = open_fmpy_slave({str(fmu)!r}, instance_name=f"r{{round}}")
-            for i in range(250):
-                try:
-                    calls[i % len(calls)](s)
-                    raise SystemExit(f"call {{i % len(calls)}} did not fail")
-                except FMICallException:
-                    pass
-                gc.collect()
-                s.setReal([vr["stiffness_exponent"], vr["hub_z"]], [1.0, 0.7])
-                s.setBoolean([vr["unilateral"]], [bool(i % 2)])
-                s.doStep(0.0, 1e-3)
-                assert s.getReal([vr["force_z"]])[0] > 0
-            s.reset()
-            s.freeInstance()
-            gc.collect()
-        print("survived")
-    """)
-    import build_scripts
-
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        [str(Path(build_scripts.__file__).parent.parent), os.environ.get("PYTHONPATH", "")])}
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, env=env)
-    assert done.returncode == 0, done.stderr[-2000:] + done.stdout[-2000:]
-    assert done.stdout.strip().endswith("survived")
-
-
-# -- packaging and leaks ------------------------------------------------------------------------
-
-def test_fmu_contains_the_law_verbatim_and_only_kind_prefixed_modules(fmu):
-    with zipfile.ZipFile(fmu) as z:
-        assert z.read("resources/cleatfmu_extended_tire_law.py") == Path(law.__file__).read_bytes()
-        assert z.read("resources/slavemodule.txt").decode().strip() == "cleatfmu_extended_tire"
-        modules = {Path(n).stem for n in z.namelist() if n.count("/") == 1 and n.endswith(".py")}
-    assert modules == {"cleatfmu_extended_tire", "cleatfmu_extended_tire_slave", "cleatfmu_extended_tire_table",
-                       "cleatfmu_extended_tire_law", "cleatfmu_extended_tire_wrapper"}
-
-
-def test_instantiate_free_cycles_leak_at_most_1_mb_and_keep_sys_path(fmu, tmp_path):
-    from fmpy import extract
-
-    cycle = _fresh_cycle(fmu, extract(str(fmu), unzipdir=tmp_path / "unzipped"))
-    for _ in range(300):  # warm-up: fmpy's and ctypes' own first-use allocations
-        cycle()
-    gc.collect()
-    path_before, rss_before = list(sys.path), rss_bytes()
-    for i in range(1000):
-        cycle()
-        if i % 100 == 99:  # fmpy's FMU2Slave objects are freed by the cyclic GC: collect, not count, them
-            gc.collect()
-    gc.collect()
-    growth = rss_bytes() - rss_before
-    assert sys.path == path_before
-    assert growth <= 1024 * 1024, f"RSS grew by {growth / 1024:.0f} kB over 1000 instantiate/free cycles"
-
-
-def test_failing_calls_and_resets_leak_at_most_1_mb(slave, vr):
-    from fmpy.fmi1 import FMICallException
-
-    s, _ = slave
-
-    def cycle():
-        try:
-            s.setReal([vr["lug_pitch"]], [0.0])
-        except FMICallException:
-            pass
-        s.reset()
-
-    for _ in range(100):
-        cycle()
-    gc.collect()
-    rss_before = rss_bytes()
-    for _ in range(1000):
-        cycle()
-    gc.collect()
-    growth = rss_bytes() - rss_before
-    assert growth <= 1024 * 1024, f"RSS grew by {growth / 1024:.0f} kB over 1000 failing calls and resets"

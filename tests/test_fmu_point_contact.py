@@ -2,48 +2,27 @@
 
 from __future__ import annotations
 
-import gc
 import json
 import math
-import subprocess
-import sys
-import textwrap
-import xml.etree.ElementTree as ET
-import zipfile
 from fractions import Fraction
-from pathlib import Path
 
 import numpy as np
 import pytest
+from fmu_helpers import (LEAK_LIMIT, assert_fmpy_matches_the_reference, assert_host_survives_errors,
+                         assert_instantiate_free_cycles_leak_at_most_1_mb_and_keep_sys_path,
+                         assert_libcosim_matches_fmpy, assert_state_round_trip, assert_value_rejected, kind_fixtures,
+                         model_description, reinitialise_and_step, rewrite_fmu, rss_growth, run_steps)
 
 from build_scripts import build_fmu, load_kind
 from build_scripts.reference import closed_form_outputs, read_reference
-from build_scripts.runners import open_fmpy_slave, run_fmpy_loop, run_libcosim, simulate_fmpy, variable_refs
+from build_scripts.runners import open_fmpy_slave, simulate_fmpy
 
 INPUTS = ["hub_z", "hub_vz", "road_z", "road_vz"]
 PARAMS = ["stiffness", "damping", "unloaded_radius"]
 REAL_OUTPUTS = ["force_z", "deflection", "deflection_rate"]
 
 
-@pytest.fixture(scope="session")
-def fmu(tmp_path_factory) -> Path:
-    """The point-contact FMU with the kind's default start values, built once."""
-    return build_fmu("point_contact", tmp_path_factory.mktemp("fmu") / "point_contact.fmu")
-
-
-@pytest.fixture(scope="session")
-def vr(fmu) -> dict:
-    return {name: ref for name, (ref, _type) in variable_refs(fmu).items()}
-
-
-@pytest.fixture
-def slave(fmu):
-    """An initialised instance with a logger; yields (slave, messages)."""
-    messages = []
-    s = open_fmpy_slave(fmu, logger=lambda status, category, message: messages.append((status, message)))
-    yield s, messages
-    s.terminate()
-    s.freeInstance()
+fmu, vr, slave = kind_fixtures("point_contact", scope="session")
 
 
 def exact_outputs(zh, vh, zr, vr_, k, c, r0):
@@ -55,14 +34,6 @@ def exact_outputs(zh, vh, zr, vr_, k, c, r0):
 
 def rel(value, exact):
     return 0.0 if value == exact else abs(float((Fraction(value) - exact) / exact))
-
-
-def rss_bytes() -> int:
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) * 1024
-    raise RuntimeError("no VmRSS")
 
 
 # -- physics ------------------------------------------------------------------------------------
@@ -98,7 +69,7 @@ def test_outputs_follow_the_current_inputs_not_the_previous_step(slave, vr):
 
 
 def test_start_values_in_xml_are_the_instance_values(fmu, vr):
-    root = ET.fromstring(zipfile.ZipFile(fmu).read("modelDescription.xml"))
+    root = model_description(fmu)
     starts = {sv.get("name"): float(sv.find("Real").get("start")) for sv in root.iter("ScalarVariable")
               if sv.find("Real") is not None and sv.find("Real").get("start") is not None}
     assert set(starts) == set(INPUTS + PARAMS)
@@ -125,23 +96,12 @@ def test_reference_csv_obeys_the_closed_form_law():
 # -- importers ----------------------------------------------------------------------------------
 
 def test_default_experiment_with_fmpy_matches_the_reference(fmu):
-    kind = load_kind("point_contact")
-    ref = read_reference("point_contact")
-    sim = simulate_fmpy(fmu, {n: ref[n] for n in ["time", *INPUTS]}, REAL_OUTPUTS + ["in_contact"])
-    for name in ["time", *REAL_OUTPUTS]:
-        np.testing.assert_allclose(sim[name], ref[name], rtol=kind.reference_rtol, atol=kind.reference_atol)
-    assert np.array_equal(sim["in_contact"], ref["in_contact"])
+    assert_fmpy_matches_the_reference(fmu, load_kind("point_contact"), INPUTS, REAL_OUTPUTS + ["in_contact"],
+                                      REAL_OUTPUTS)
 
 
 def test_libcosimpy_gives_the_same_outputs_as_fmpy(fmu):
-    ref = read_reference("point_contact")
-    signals = {n: ref[n] for n in ["time", *INPUTS]}
-    outputs = REAL_OUTPUTS + ["in_contact"]
-    fmpy_out = run_fmpy_loop(fmu, signals, outputs)
-    cosim_out = run_libcosim(fmu, signals, outputs)
-    for name in outputs:
-        assert np.array_equal(cosim_out[name], fmpy_out[name]), name
-        assert np.array_equal(cosim_out[name], ref[name][1:]), name  # = fmpy.simulate_fmu, one row later
+    assert_libcosim_matches_fmpy(fmu, "point_contact", INPUTS, REAL_OUTPUTS + ["in_contact"])
 
 
 def test_results_are_deterministic(fmu):
@@ -170,40 +130,23 @@ def test_two_fmus_of_the_kind_keep_their_own_parameters(fmu, tmp_path, vr):
 # -- FMU state and reset ------------------------------------------------------------------------
 
 def test_state_round_trip_is_bit_identical(fmu, vr):
-    root = ET.fromstring(zipfile.ZipFile(fmu).read("modelDescription.xml"))
-    cs = root.find("CoSimulation")
+    cs = model_description(fmu).find("CoSimulation")
     assert cs.get("canGetAndSetFMUstate") == "true" and cs.get("canSerializeFMUstate") == "true"
     rng = np.random.default_rng(3)
     inputs = [[0.75 + rng.uniform(-0.05, 0.01), rng.uniform(-1, 1), rng.uniform(0, 0.05), rng.uniform(-1, 1)]
               for _ in range(50)]
 
-    def run(s):
-        out = []
-        for i, u in enumerate(inputs):
-            s.setReal([vr[n] for n in INPUTS], u)
-            s.doStep(i * 1e-3, 1e-3)
-            out.append(s.getReal([vr[n] for n in REAL_OUTPUTS]) + list(s.getBoolean([vr["in_contact"]])))
-        return out
-
-    s = open_fmpy_slave(fmu)
-    t = open_fmpy_slave(fmu, instance_name="copy")
-    try:
+    def prepare(s):
         s.setReal([vr["stiffness"], vr["damping"]], [250000.0, 1500.0])
         s.setReal([vr[n] for n in INPUTS], [0.72, 0.1, 0.01, 0.0])
-        state = s.getFMUstate()
-        first = run(s)
-        s.setFMUstate(state)
+
+    def restored(s):
         assert s.getReal([vr["stiffness"], vr["hub_z"]]) == [250000.0, 0.72]
-        assert run(s) == first
-        blob = s.serializeFMUstate(state)
-        s.freeFMUstate(state)
-        copy = t.deSerializeFMUstate(blob)
-        t.setFMUstate(copy)
-        t.freeFMUstate(copy)
-        assert run(t) == first
-    finally:
-        s.freeInstance()
-        t.freeInstance()
+
+    def read(s):
+        return s.getReal([vr[n] for n in REAL_OUTPUTS]) + list(s.getBoolean([vr["in_contact"]]))
+
+    assert_state_round_trip(fmu, prepare, lambda s: run_steps(s, vr, INPUTS, inputs, read), check_restored=restored)
 
 
 def test_reset_returns_to_the_start_values(slave, vr):
@@ -214,10 +157,7 @@ def test_reset_returns_to_the_start_values(slave, vr):
     assert s.getReal([vr["force_z"]]) != before[-1:]
     s.reset()
     assert s.getReal([vr[n] for n in names + ["force_z"]]) == before
-    s.setupExperiment(startTime=0.0)
-    s.enterInitializationMode()
-    s.exitInitializationMode()
-    s.doStep(0.0, 1e-3)
+    reinitialise_and_step(s)
 
 
 # -- robustness ---------------------------------------------------------------------------------
@@ -229,16 +169,8 @@ def test_reset_returns_to_the_start_values(slave, vr):
     ("road_vz", -math.inf, "road_vz = -inf"),
 ])
 def test_invalid_values_give_an_error_status_with_the_reason(slave, vr, name, value, reason):
-    from fmpy.fmi1 import FMICallException
-
     s, messages = slave
-    before = s.getReal([vr[n] for n in INPUTS + PARAMS])
-    with pytest.raises(FMICallException) as info:
-        s.setReal([vr[name]], [value])
-    assert info.value.status >= 3  # fmi2Error or fmi2Fatal (pythonfmu 0.7 reports every failure as fatal)
-    assert any(status == 3 and reason in message for status, message in messages), messages
-    assert s.getReal([vr[n] for n in INPUTS + PARAMS]) == before  # nothing was stored
-    s.doStep(0.0, 1e-3)
+    assert_value_rejected(s, messages, vr, INPUTS + PARAMS, name, value, reason)
 
 
 def test_setting_an_output_or_unknown_reference_fails(slave, vr):
@@ -256,50 +188,35 @@ def test_setting_an_output_or_unknown_reference_fails(slave, vr):
     assert s.getReal([vr["force_z"]]) == [0.0]
 
 
+def test_overflowing_outputs_fail_with_a_reason(slave, vr):
+    from fmpy.fmi1 import FMICallException
+
+    s, messages = slave
+    s.setReal([vr["hub_z"]], [-1e304])  # finite, but stiffness * deflection overflows
+    with pytest.raises(FMICallException):
+        s.getReal([vr["force_z"]])
+    assert any(status == 3 and "cannot be evaluated" in m and "force_z = inf" in m for status, m in messages), messages
+    s.setReal([vr["hub_z"]], [0.7])
+    assert s.getReal([vr["force_z"]])[0] > 0
+
+
 def test_host_survives_repeated_errors_and_frees_cleanly(fmu):
-    """Run in a child process, so that a crash shows as a failed test, not a dead test session."""
-    script = textwrap.dedent(f"""
-        import gc, math
-        from fmpy.fmi1 import FMICallException
-        from build_scripts.runners import open_fmpy_slave, variable_refs
-        vr = {{n: r for n, (r, _) in variable_refs({str(fmu)!r}).items()}}
-        for round in range(3):
-            s = open_fmpy_slave({str(fmu)!r}, instance_name=f"r{{round}}")
-            for i in range(200):
-                try:
-                    s.setReal([vr["stiffness"]], [-1.0 if i % 2 else math.nan])
-                except FMICallException:
-                    pass
-                gc.collect()
-                s.setReal([vr["hub_z"]], [0.7])
-                s.doStep(0.0, 1e-3)
-                assert s.getReal([vr["force_z"]])[0] > 0
-            s.reset()
-            s.freeInstance()
-            gc.collect()
-        print("survived")
-    """)
-    import os
-
-    import build_scripts
-
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        [str(Path(build_scripts.__file__).parent.parent), os.environ.get("PYTHONPATH", "")])}
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, env=env)
-    assert done.returncode == 0, done.stderr[-2000:]
-    assert done.stdout.strip().endswith("survived")
+    assert_host_survives_errors(
+        fmu, ['lambda s: s.setReal([vr["stiffness"]], [math.nan])', 'lambda s: s.setReal([vr["stiffness"]], [-1.0])'],
+        """
+        s.setReal([vr["hub_z"]], [0.7])
+        s.doStep(0.0, 1e-3)
+        assert s.getReal([vr["force_z"]])[0] > 0
+        """, iterations=200)
 
 
 def test_tampered_start_file_fails_instantiation_without_crashing(fmu, tmp_path):
-    bad = tmp_path / "bad.fmu"
-    with zipfile.ZipFile(fmu) as zin, zipfile.ZipFile(bad, "w") as zout:
-        for info in zin.infolist():
-            data = zin.read(info)
-            if info.filename == "resources/cleatfmu_point_contact_start.json":
-                doc = json.loads(data)
-                doc["start"]["stiffness"] = -5.0
-                data = json.dumps(doc).encode()
-            zout.writestr(info, data)
+    def negative_stiffness(data):
+        doc = json.loads(data)
+        doc["start"]["stiffness"] = -5.0
+        return json.dumps(doc).encode()
+
+    bad = rewrite_fmu(fmu, tmp_path / "bad.fmu", "resources/cleatfmu_point_contact_start.json", negative_stiffness)
     messages = []
     with pytest.raises(Exception, match="instantiate"):
         open_fmpy_slave(bad, logger=lambda status, category, message: messages.append(message))
@@ -317,34 +234,8 @@ def unzipped(fmu, tmp_path_factory) -> str:
     return extract(str(fmu), unzipdir=tmp_path_factory.mktemp("unzipped"))
 
 
-def _fresh_cycle(fmu, unzipped):
-    from fmpy import read_model_description
-    from fmpy.fmi2 import FMU2Slave
-
-    md = read_model_description(str(fmu), validate=False)
-
-    def cycle():
-        s = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
-                      instanceName="leak")
-        s.instantiate()
-        s.freeInstance()  # also unloads the library: a new FMU2Slave each cycle
-    return cycle
-
-
 def test_instantiate_free_cycles_leak_at_most_1_mb_and_keep_sys_path(fmu, unzipped):
-    cycle = _fresh_cycle(fmu, unzipped)
-    for _ in range(300):  # warm-up: fmpy's and ctypes' own first-use allocations
-        cycle()
-    gc.collect()
-    path_before, rss_before = list(sys.path), rss_bytes()
-    for i in range(1000):
-        cycle()
-        if i % 100 == 99:  # fmpy's FMU2Slave objects are freed by the cyclic GC: collect, not count, them
-            gc.collect()
-    gc.collect()
-    growth = rss_bytes() - rss_before
-    assert sys.path == path_before
-    assert growth <= 1024 * 1024, f"RSS grew by {growth / 1024:.0f} kB over 1000 instantiate/free cycles"
+    assert_instantiate_free_cycles_leak_at_most_1_mb_and_keep_sys_path(fmu, unzipped)
 
 
 def test_fmi_level_instantiate_free_cycles_on_one_library_leak_at_most_1_mb(fmu, unzipped):
@@ -353,30 +244,19 @@ def test_fmi_level_instantiate_free_cycles_on_one_library_leak_at_most_1_mb(fmu,
 
     md = read_model_description(str(fmu), validate=False)
     s = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier)
+
+    def cycle():
+        s.instantiate()
+        s.fmi2FreeInstance(s.component)
+
     try:
-        for _ in range(100):
-            s.instantiate()
-            s.fmi2FreeInstance(s.component)
-        gc.collect()
-        rss_before = rss_bytes()
-        for _ in range(1000):
-            s.instantiate()
-            s.fmi2FreeInstance(s.component)
-        gc.collect()
-        growth = rss_bytes() - rss_before
+        growth = rss_growth(cycle, warmup=100)
     finally:
         s.freeLibrary()
-    assert growth <= 1024 * 1024, f"RSS grew by {growth / 1024:.0f} kB over 1000 fmi2Instantiate/fmi2FreeInstance"
+    assert growth <= LEAK_LIMIT, f"RSS grew by {growth / 1024:.0f} kB over 1000 fmi2Instantiate/fmi2FreeInstance"
 
 
 def test_reset_cycles_leak_at_most_1_mb(slave):
     s, _ = slave
-    for _ in range(100):
-        s.reset()
-    gc.collect()
-    rss_before = rss_bytes()
-    for _ in range(1000):
-        s.reset()
-    gc.collect()
-    growth = rss_bytes() - rss_before
-    assert growth <= 1024 * 1024, f"RSS grew by {growth / 1024:.0f} kB over 1000 resets"
+    growth = rss_growth(s.reset, warmup=100)
+    assert growth <= LEAK_LIMIT, f"RSS grew by {growth / 1024:.0f} kB over 1000 resets"

@@ -13,9 +13,10 @@ Runtime contract (this file runs inside the FMU, on the importing machine):
 * imports only the standard library, pythonfmu (embedded in the FMU) and
   modules the build places beside this file: ``cleatfmu_extended_tire_law``,
   a verbatim copy of the project's tire law; ``cleatfmu_extended_tire_table``,
-  the table-driven slave base class (outputs as direct feedthrough, checks,
-  FMU state; read its docstring); ``cleatfmu_extended_tire_wrapper``, the
-  workarounds for pythonfmu 0.7's FMI wrapper;
+  the table-driven slave base class shared by the kinds (a copy of
+  ``fmu_src/table_slave.py``: outputs as direct feedthrough, checks, FMU
+  state, error reporting; read its docstring); ``cleatfmu_extended_tire_wrapper``,
+  the workarounds for pythonfmu 0.7's FMI wrapper;
 * the start values of this FMU instance are read from its own resources
   folder (``cleatfmu_extended_tire_start.json``), never from module-level
   state, so that several FMUs of this kind in one process each keep theirs;
@@ -38,15 +39,11 @@ START_FILE = "cleatfmu_extended_tire_start.json"
 #: Format tag of the FMU state (``fmi2GetFMUstate`` / serialization).
 STATE_FORMAT = "cleatfmu_extended_tire/1"
 
-#: Every variable of the FMU, in value-reference order (value reference = row
-#: index).  Columns: name, type, causality, variability, unit, start, depends,
-#: description.  ``start`` may name another variable whose start it copies;
-#: the parameters' starts are ``tire_law.EXTENDED_DEFAULTS``.  ``depends``
-#: (outputs only) maps each input and parameter the output depends on to the
-#: FMI dependency kind (constant: linear with a constant coefficient;
-#: dependent: anything else).  This table is also read (as a literal, without
-#: importing this file) by the build to write units, descriptions and the
-#: model structure.
+#: Every variable of the FMU, in value-reference order, with the columns of
+#: ``cleatfmu_extended_tire_table`` (read its docstring); the parameters'
+#: starts are ``tire_law.EXTENDED_DEFAULTS``.  The build reads this literal,
+#: without importing this file, to write units, descriptions and the model
+#: structure.
 VARIABLES = (
     ("hub_z", "Real", "input", "continuous", "m", "unloaded_radius", {},
      "Hub (wheel centre) height, absolute, m (z upwards); starts at the unloaded radius, "
@@ -168,12 +165,15 @@ class CleatfmuExtendedTire(_table.TableSlave):
     wrapper = _wrapper
 
     def evaluate(self, values):
+        """Write the five outputs into `values` from the extended law (see the base class)."""
         v = values
         v[_FORCE], v[_DEFL], v[_RATE], v[_CONTACT], v[_ROAD] = _law.extended_tire(
             v[_HUB_Z], v[_HUB_VZ], v[_HUB_X], v[_HUB_VX], v[_ROAD_Z], v[_ROAD_VZ], _parameters(v))
 
     def set_problem(self, values):
+        """Why the parameters of `values` are invalid together, or None (see the base class)."""
         return _law.extended_parameter_problem(_parameters(values))
 
     def value_problem(self, values):
+        """Why a parameter of `values` is invalid by itself, or None (see the base class)."""
         return _value_problem(_parameters(values))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 
+from ..cliutil import check_output, choose_tire
 from ..errors import InputError
 from ..preprocess import DEFAULT_CUTOFF_HZ
 
@@ -65,20 +66,9 @@ def run(args) -> int:
     from ..recording import read_recording
 
     rec = read_recording(args.recording)
-    tire = args.tire
-    if tire is None:
-        if len(rec.tires) != 1:
-            raise InputError(rec.source, f"holds channels {', '.join(rec.tires)}; choose one with --tire")
-        tire = rec.tires[0]
-    if tire not in rec.accel_m_s2:
-        raise InputError(rec.source, f"tire {tire} is not in the recording (channels: {', '.join(rec.tires)})")
-    if args.plot is not None and not str(args.plot).lower().endswith(".png"):
-        raise InputError(args.plot, "the plot file name must end with .png")
-    if args.fmu is not None and not str(args.fmu).endswith(".fmu"):
-        raise InputError(args.fmu, "the FMU file name must end with .fmu")
-    for out in (args.plot, args.fmu):
-        if out is not None and not os.path.isdir(os.path.dirname(os.path.abspath(out))):
-            raise InputError(out, "output directory does not exist")
+    tire = choose_tire(rec, args.tire)
+    check_output(args.plot, ".png", "plot")
+    check_output(args.fmu, ".fmu", "FMU")
     tick, bar = _progress(f"diagnose {tire}")
     try:
         diag, gain = run_diagnosis(rec, tire, cutoff_hz=args.cutoff_hz, fmu_path=args.fmu, workers=args.workers,

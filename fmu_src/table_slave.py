@@ -1,13 +1,22 @@
 """Table-driven FMI 2.0 co-simulation slave for pythonfmu 0.7 (the part that knows no tire law).
 
-This module runs inside the FMU (the build copies it beside the slave module),
-so it imports only the standard library and pythonfmu.  A slave class derives
-from :class:`TableSlave`, sets the class attributes
+This module runs inside FMUs, not in the cleatfmu package: like
+``pythonfmu_wrapper.py``, the build copies it into every FMU of a kind that
+uses it, under a module name unique to the kind (``"modules"`` of the kind's
+``kind.json``, e.g. ``cleatfmu_point_contact_table``), so it imports only the
+standard library and pythonfmu.  A slave class derives from
+:class:`TableSlave`, sets the class attributes
 
 * ``variables`` — the kind's variable table, rows ``(name, type, causality,
   variability, unit, start, depends, description)``, value reference = row
-  index, type ``"Real"`` or ``"Boolean"``; a ``start`` may name another
-  variable whose start it copies;
+  index: type ``"Real"`` or ``"Boolean"``; causality ``"input"``,
+  ``"parameter"`` or ``"output"``; variability and unit as in the model
+  description; ``start`` (inputs and parameters) a value, or the name of
+  another variable whose start it copies; ``depends`` (outputs, for the model
+  structure the build writes) maps each input and parameter the output
+  depends on to its FMI dependency kind (``"constant"``: linear with a
+  constant coefficient; ``"tunable"``: linear with a coefficient that is a
+  tunable parameter; ``"dependent"``: anything else);
 * ``start_file`` — the file of the FMU's resources folder holding this FMU's
   start values, ``{"start": {name: value, ...}, "provenance": {...}}``;
 * ``state_format`` — the format tag of its FMU state;
@@ -33,6 +42,9 @@ Behaviour:
   reports fmi2Fatal for every failing call) without harming the host, through
   the wrapper workarounds; an evaluation that raises or gives a non-finite
   Real output fails the same way;
+* the FMU state is ``{"format": state_format, "values": [...]}``, the values
+  of the inputs and parameters in value-reference order (outputs are
+  recomputed from them);
 * an instance holds no reference cycle (the pythonfmu variable objects, whose
   getters would refer back to it, are only created to write the model
   description), so it is freed as soon as the importer frees or resets it.
@@ -52,7 +64,20 @@ _SETTABLE_CAUSALITIES = ("input", "parameter")
 
 
 def _type_problem(row, value):
-    """Why `value` is not a value of the variable of table row `row`, or None."""
+    """Why `value` is not a value of the variable of a table row, or None.
+
+    Parameters
+    ----------
+    row : tuple
+        Row of a variable table (name, type, causality, variability, unit, ...).
+    value : object
+        Candidate value.
+
+    Returns
+    -------
+    str or None
+        One-line description of the problem.
+    """
     if row[1] == "Boolean":
         return None if isinstance(value, bool) else f"{row[0]} = {value!r}: must be a Boolean"
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not _isfinite(value):
@@ -61,7 +86,20 @@ def _type_problem(row, value):
 
 
 class TableSlave(Fmi2Slave):
-    """FMI 2.0 co-simulation slave whose variables are the rows of ``variables``."""
+    """FMI 2.0 co-simulation slave whose variables are the rows of ``variables``.
+
+    Parameters
+    ----------
+    **kwargs
+        Passed on to :class:`pythonfmu.Fmi2Slave` (``instance_name``,
+        ``resources``, and ``logger`` when the FMI wrapper instantiates).
+
+    Raises
+    ------
+    ValueError
+        If the start values (table defaults updated by ``start_file``) are
+        invalid.
+    """
 
     variables = ()
     start_file = ""
@@ -78,20 +116,56 @@ class TableSlave(Fmi2Slave):
         cls._settable_real = cls._settable & cls._real
         cls._settable_boolean = cls._settable & cls._boolean
         cls._parameters = frozenset(vr for vr, row in enumerate(rows) if row[2] == "parameter")
+        cls._real_inputs = cls._settable_real - cls._parameters
         cls._real_outputs = tuple(sorted(vr for vr, row in enumerate(rows) if row[2] == "output" and row[1] == "Real"))
         cls._state_vrs = tuple(sorted(cls._settable))
 
     # -- to be implemented by the kind -----------------------------------------------------
     def evaluate(self, values):
-        """Write the outputs into `values` (a list indexed by value reference) from its inputs and parameters."""
+        """Compute the outputs from the inputs and parameters.
+
+        Parameters
+        ----------
+        values : list
+            Every variable's value, indexed by value reference; the outputs
+            are written into it.
+
+        Raises
+        ------
+        ArithmeticError, ValueError
+            If the outputs cannot be evaluated (the FMI call then fails).
+        """
         raise NotImplementedError
 
     def set_problem(self, values):
-        """Why the complete, well-typed value list `values` is invalid, or None."""
+        """Why a complete value list is invalid.
+
+        Parameters
+        ----------
+        values : list
+            Every variable's value, indexed by value reference; inputs and
+            parameters have their variables' types.
+
+        Returns
+        -------
+        str or None
+            One-line description of the first problem, None if valid.
+        """
         raise NotImplementedError
 
     def value_problem(self, values):
-        """Why `values`, with values just set by an importer, must be refused, or None (default: set_problem)."""
+        """Why values just set by an importer must be refused (default: :meth:`set_problem`).
+
+        Parameters
+        ----------
+        values : list
+            Every variable's value with the new ones, indexed by value reference.
+
+        Returns
+        -------
+        str or None
+            One-line description of the problem, None to accept the values.
+        """
         return self.set_problem(values)
 
     # -- construction ----------------------------------------------------------------------
@@ -133,7 +207,18 @@ class TableSlave(Fmi2Slave):
         return values
 
     def to_xml(self, model_options=None):
-        """Register the variables of the table, then write the model description."""
+        """Register the variables of the table, then write the model description.
+
+        Parameters
+        ----------
+        model_options : dict, optional
+            pythonfmu's model options.
+
+        Returns
+        -------
+        xml.etree.ElementTree.Element
+            The model description written by pythonfmu.
+        """
         if not self.vars:
             for vr, (name, typ, causality, variability, _unit, _start, _dep, description) in enumerate(self.variables):
                 cls = Real if typ == "Real" else Boolean
@@ -248,6 +333,17 @@ class TableSlave(Fmi2Slave):
         return [v[vr] for vr in vrs]
 
     def set_real(self, vrs, values):
+        if self._real_inputs.issuperset(vrs):
+            # Inputs only (the importer's per-step call): the checks of _store, without a value_problem.
+            for value in values:
+                if value.__class__ is not float or not _isfinite(value):
+                    break
+            else:
+                v = self._values
+                for vr, value in zip(vrs, values):
+                    v[vr] = value
+                self._stale = True
+                return
         self._store(vrs, values, "Real", self._settable_real)
 
     def set_boolean(self, vrs, values):
