@@ -7,7 +7,7 @@ import tempfile
 from pathlib import Path
 from typing import Mapping
 
-__all__ = ["atomic_write_texts", "atomic_write_bytes"]
+__all__ = ["atomic_write_texts", "atomic_write_bytes", "publish_files"]
 
 
 def atomic_write_bytes(files: Mapping[Path, bytes]) -> None:
@@ -39,3 +39,9 @@ def atomic_write_bytes(files: Mapping[Path, bytes]) -> None:
 def atomic_write_texts(files: Mapping[Path, str]) -> None:
     """:func:`atomic_write_bytes` for UTF-8 texts (newline line ends)."""
     atomic_write_bytes({path: text.encode("utf-8") for path, text in files.items()})
+
+
+def publish_files(sources: Mapping[Path, Path]) -> list[Path]:
+    """Copy finished files (source -> target mapping given as target: source) all-or-nothing."""
+    atomic_write_bytes({Path(dst): Path(src).read_bytes() for dst, src in sources.items()})
+    return [Path(dst) for dst in sources]

@@ -13,7 +13,7 @@ import numpy as np
 
 from ._files import atomic_write_bytes
 
-__all__ = ["figure", "save_png", "png_bytes", "plot_decay", "plot_log_peaks", "plot_comparison", "plot_diagnosis"]
+__all__ = ["figure", "save_png", "png_bytes", "plot_decay", "plot_log_peaks", "plot_comparison", "plot_diagnosis", "plot_tractor_diagnosis"]
 
 
 def figure(nrows=1, ncols=1, *, size=(9.0, 4.0), **kwargs):
@@ -143,4 +143,31 @@ def plot_diagnosis(diag, *, nrmse_before=None, nrmse_after=None, title: str | No
     _limit_to(ax_r, pb.measured[w])
     ax_r.grid(alpha=0.3)
     ax_r.legend(fontsize=8, loc="upper right")
+    return fig
+
+
+def plot_tractor_diagnosis(diag, *, nrmse_before=None, nrmse_after=None):
+    """Every channel: measured vs the four-corner baseline and the final whole-tractor model."""
+    pb = diag.problem
+    t, w = pb.rec.time_s, pb.window
+    n = len(pb.channels)
+    fig, axes = figure(n, 1, size=(10.0, 2.3 * n + 0.8), sharex=True, squeeze=False)
+    before = nrmse_before or diag.baseline.nrmse
+    after = nrmse_after or diag.final.nrmse
+    label = " + ".join(diag.effects) or "none"
+    for ax, ch in zip(axes[:, 0], pb.channels):
+        ax.plot(t[w], pb.measured[ch][w], color="C0", lw=1.0, label=f"{ch} measured (low-pass)")
+        ax.plot(t[w], diag.baseline.prediction[ch][w], color="C7", lw=0.8, ls="--",
+                label=f"corners, NRMSE {before[ch]:.1%}")
+        ax.plot(t[w], diag.final.prediction[ch][w], color="C3", lw=0.8, label=f"final, NRMSE {after[ch]:.1%}")
+        left = diag.unexplained.get(ch)
+        if left:
+            ax.axvspan(*left["window"], color="#f4c27a", alpha=0.35,
+                       label=f"unexplained {left['share']:.1%} of the signal")
+        ax.set_ylabel("m/s²")
+        _limit_to(ax, pb.measured[ch][w])
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[0, 0].set_title(f"{pb.rec.source}: effects found: {label}", fontsize=9)
+    axes[-1, 0].set_xlabel("time / s")
     return fig

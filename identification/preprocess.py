@@ -25,6 +25,8 @@ Everything is in SI units: time in s, acceleration in m/s², frequency in Hz.
 
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -122,8 +124,16 @@ def lowpass(x, *, sample_rate_hz: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ,
     if cutoff_hz >= sample_rate_hz / 2 * (1 - 1e-9):
         raise InputError(source, f"low-pass cut-off {cutoff_hz:g} Hz is not below the Nyquist frequency "
                                  f"{sample_rate_hz / 2:g} Hz (sampling rate {sample_rate_hz:g} Hz)")
+    return signal.sosfiltfilt(_butter_sos(order, float(cutoff_hz), float(sample_rate_hz)).copy(),
+                              np.asarray(x, dtype=float))
+
+
+@functools.lru_cache(maxsize=64)
+def _butter_sos(order: int, cutoff_hz: float, sample_rate_hz: float) -> np.ndarray:
+    """The Butterworth design, once per (order, cut-off, rate)."""
     sos = signal.butter(order, cutoff_hz, fs=sample_rate_hz, output="sos")
-    return signal.sosfiltfilt(sos, np.asarray(x, dtype=float))
+    sos.setflags(write=False)
+    return sos
 
 
 def filter_guard_s(cutoff_hz: float) -> float:

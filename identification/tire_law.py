@@ -47,7 +47,7 @@ __all__ = [
     "CONTACT_MODES", "deflection_m", "deflection_rate_m_s", "force_n", "in_contact",
     "point_contact", "parameter_problem", "value_problem",
     "EXTENDED_DEFAULTS", "footprint_cleat", "lug_road", "elastic_force", "extended_tire",
-    "extended_parameter_problem", "extended_force_fn",
+    "extended_parameter_problem", "extended_force_fn", "LAW_FIELDS", "law_vector", "tire_force",
 ]
 
 #: Accepted values of the ``contact`` option of :func:`point_contact`.
@@ -360,3 +360,60 @@ def extended_force_fn(p):
         return f
 
     return force
+
+
+# ----------------------------------------------------------------------------- the law as one flat function
+
+#: Order of the extended tire's parameters in the flat vector of :func:`tire_force`.
+LAW_FIELDS = ("stiffness", "damping", "unloaded_radius", "footprint_length", "cleat_x", "cleat_height",
+              "cleat_width", "unilateral", "stiffness_exponent", "static_load", "friction_force",
+              "friction_velocity", "lug_amplitude", "lug_pitch", "lug_phase")
+
+
+def law_vector(p) -> list:
+    """The parameters `p` (named as in :data:`EXTENDED_DEFAULTS`) as the flat vector of :func:`tire_force`."""
+    return [float(p[name]) for name in LAW_FIELDS]
+
+
+def tire_force(hub_z, hub_vz, hub_x, hub_vx, road_z, road_vz, q):
+    """Force of the extended tire (N) with its parameters as a flat vector `q` (see :data:`LAW_FIELDS`).
+
+    The same operations, in the same order, as :func:`extended_tire`, written
+    with scalars and :mod:`math` only, so that a JIT compiler (numba) compiles
+    this very function for the fitting models' compiled stepping while the
+    plain-Python stepping and the FMUs run it as it stands.
+    """
+    k, c, r0 = q[0], q[1], q[2]
+    fp, xc, hc, wc = q[3], q[4], q[5], q[6]
+    n, w_load, fc, vf = q[8], q[9], q[10], q[11]
+    la, lp, lph = q[12], q[13], q[14]
+    cleat, cleat_slope = 0.0, 0.0
+    if hc != 0.0:
+        if fp <= 0.0:
+            if xc <= hub_x < xc + wc:
+                cleat = hc
+        else:
+            lo, hi = hub_x - 0.5 * fp, hub_x + 0.5 * fp
+            left, right = max(lo, xc), min(hi, xc + wc)
+            if right > left:
+                cleat = hc * (right - left) / fp
+                cleat_slope = ((1.0 if hi < xc + wc else 0.0) - (1.0 if lo > xc else 0.0)) * hc / fp
+    lug, lug_slope = 0.0, 0.0
+    if la != 0.0:
+        wave = 2.0 * math.pi / lp
+        arg = wave * hub_x + lph
+        lug, lug_slope = la * math.sin(arg), la * wave * math.cos(arg)
+    road = road_z + cleat + lug
+    d = r0 - (hub_z - road)
+    dd = road_vz + (cleat_slope + lug_slope) * hub_vx - hub_vz
+    if n == 1.0:
+        f = k * d
+    else:
+        ratio = d * k / (n * w_load)
+        f = math.copysign(w_load * abs(ratio) ** n, ratio)
+    f = f + c * dd
+    if fc != 0.0:
+        f += fc * math.tanh(dd / vf)
+    if q[7] != 0.0 and not (d > 0.0 and f > 0.0):
+        return 0.0
+    return f

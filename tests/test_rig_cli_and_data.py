@@ -46,6 +46,9 @@ def test_same_seed_gives_byte_identical_files(cli, tmp_path):
     (("--param", "sensor.channels=FL,XX"), "subset of FL,FR,RL,RR"),
     (("--param", "vehicle.mass_kg=3000"), "does not match the wheel loads"),
     (("--param", "speed_kmh"), "expected key=value"),
+    (("--param", "axle_coupling.front_axle_pivot=2"), "axle_coupling.front_axle_pivot must be 0 or 1"),
+    (("--param", "axle_coupling.front_axle_pivot=0.5"), "axle_coupling.front_axle_pivot must be 0 or 1"),
+    (("--param", "cleat.stagger_m=nan"), "cleat.stagger_m must be finite"),
 ])
 def test_rig_bad_input_one_line_exit_2_nothing_written(cli, tmp_path, args, needle):
     res = cli("rig", *args, "-o", tmp_path / "x")
@@ -58,6 +61,17 @@ def test_list_params(cli):
     res = cli("rig", "--list-params")
     assert res.code == 0
     assert "enveloping.footprint_front_m" in res.out and "tire.RR.c_Ns_m" in res.out
+    assert "axle_coupling.front_axle_pivot" in res.out and "axle_coupling.front_axle_roll_inertia_kg_m2" in res.out
+    assert "negative: the left one beyond the right" in res.out
+
+
+def test_rig_cli_pivoting_axle_and_negative_stagger(cli, tmp_path):
+    res = cli("rig", "--effect", "axle_coupling", "--param", "axle_coupling.front_axle_pivot=1",
+              "--param", "cleat.stagger_m=-0.1", "--param", "duration_s=2", "-o", tmp_path / "p")
+    assert res.code == 0, res.err
+    truth = json.loads((tmp_path / "p.truth.json").read_text())
+    assert truth["body"]["front_axle"] == "pivot" and truth["parameters"]["cleat.stagger_m"] == -0.1
+    assert truth["tires"]["FR"]["arrival_s"] < truth["tires"]["FL"]["arrival_s"]
 
 
 def test_embedded_test_day_is_small_readable_and_regenerable(tmp_path):

@@ -9,7 +9,7 @@ from ..cliutil import check_output, choose_tire
 from ..errors import InputError
 from ..preprocess import DEFAULT_CUTOFF_HZ
 
-__all__ = ["add_parser", "run_diagnosis"]
+__all__ = ["add_parser", "run_diagnosis", "run_tractor_diagnosis"]
 
 
 def _progress(desc: str):
@@ -62,42 +62,103 @@ def _text(diag, gain) -> str:
     return "\n".join(lines)
 
 
+def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=None, workers: int = 1,
+                          progress=None):
+    """Diagnose every channel jointly and measure the gain with one FMU per tire: (TractorDiagnosis, TractorGain)."""
+    from ..tractor_cosim import measure_tractor_gain
+    from .joint_select import diagnose_tractor
+
+    diag = diagnose_tractor(rec, cutoff_hz=cutoff_hz, workers=workers, progress=progress)
+    if progress is not None:
+        progress("FMU co-simulation")
+    try:
+        gain = measure_tractor_gain(diag, fmu_dir)
+    except OSError as exc:
+        raise InputError(fmu_dir, f"cannot write: {exc.strerror or exc}") from None
+    return diag, gain
+
+
+def _tractor_text(diag, gain) -> str:
+    doc = diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
+    body = doc["body"]
+    lines = [f"{diag.problem.rec.source}: effects the four-corner model misses: "
+             f"{', '.join(diag.effects) or 'none'}"]
+    for effect in diag.effects:
+        lines.append(f"  {effect}: {diag.evidence.get(effect, '')}")
+    for name in ("pitch_index", "roll_index"):
+        if body[name]:
+            lo, hi = body[name]["ci"]
+            lines.append(f"  {name:<12} {body[name]['value']:.3f} ({lo:.3f}-{hi:.3f})")
+    speed = body["speed_m_s"]
+    lines.append(f"  front axle   {body['front_axle']}; speed {speed['sidecar'] * 3.6:.2f} km/h (sidecar)"
+                 + (f", {speed['from_delay'] * 3.6:.2f} km/h from the front/rear delay" if speed["from_delay"] else ""))
+    for tire, t in doc["tires"].items():
+        left = t["unexplained"]
+        flag = (f"UNEXPLAINED {left['share']:.1%} of the signal in {left['window'][0]:.3f}-{left['window'][1]:.3f} s"
+                if left else "residual at the noise floor")
+        lines.append(f"  {tire}: k {t['k'] / 1e3:.1f} kN/m ({t['k_ci'][0] / 1e3:.1f}-{t['k_ci'][1] / 1e3:.1f})  "
+                     f"c {t['c'] / 1e3:.3f} kN s/m ({t['c_ci'][0] / 1e3:.3f}-{t['c_ci'][1] / 1e3:.3f})  "
+                     f"NRMSE {t['nrmse_before']:.1%} -> {t['nrmse_after']:.1%} (noise {t['noise_nrmse']:.1%}): {flag}")
+    lines.append(f"  95 % intervals: {doc['intervals']}")
+    lines.append(f"  FMU co-simulation (fmpy, one FMU per tire) agrees with the fitting model to {gain.agreement:.1e}; "
+                 f"{diag.seconds:.1f} s diagnosis, {gain.seconds:.1f} s FMU gain check")
+    return "\n".join(lines)
+
+
 def run(args) -> int:
     from ..recording import read_recording
 
     rec = read_recording(args.recording)
-    tire = choose_tire(rec, args.tire)
+    tire = choose_tire(rec, args.tire) if args.tire is not None or len(rec.tires) == 1 else None
     check_output(args.plot, ".png", "plot")
     check_output(args.fmu, ".fmu", "FMU")
-    tick, bar = _progress(f"diagnose {tire}")
+    if args.fmu is not None and tire is None:
+        raise InputError("--fmu", "names one tire's FMU: use it with --tire, or --fmu-dir for every tire")
+    if args.fmu_dir is not None and not os.path.isdir(args.fmu_dir):
+        raise InputError(args.fmu_dir, "--fmu-dir: no such directory")
+    tick, bar = _progress(f"diagnose {tire or 'tractor'}")
     try:
-        diag, gain = run_diagnosis(rec, tire, cutoff_hz=args.cutoff_hz, fmu_path=args.fmu, workers=args.workers,
-                                   progress=tick)
+        if args.fmu is not None:
+            import tempfile
+            from .._files import publish_files
+            with tempfile.TemporaryDirectory(prefix="cleatfmu_fmus_") as tmp:
+                diag, gain = run_tractor_diagnosis(rec, cutoff_hz=args.cutoff_hz, fmu_dir=tmp,
+                                                   workers=args.workers, progress=tick)
+                own = next(p for p in gain.fmu_paths if p.stem.endswith(f"_{tire}"))
+                publish_files({args.fmu: own})
+        else:
+            diag, gain = run_tractor_diagnosis(rec, cutoff_hz=args.cutoff_hz, fmu_dir=args.fmu_dir,
+                                               workers=args.workers, progress=tick)
     finally:
         bar.close()
     if args.plot is not None:
-        from ..plots import plot_diagnosis, save_png
-        save_png(plot_diagnosis(diag, nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after), args.plot)
+        from ..plots import plot_tractor_diagnosis, save_png
+        save_png(plot_tractor_diagnosis(diag, nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after),
+                 args.plot)
     if args.json:
-        print(json.dumps(diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after), indent=2))
+        doc = diag.tire_json(tire, nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after) if tire else \
+            diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
+        print(json.dumps(doc, indent=2))
     else:
-        print(_text(diag, gain))
+        print(_tractor_text(diag, gain))
     return 0
 
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
-        "diagnose", help="find the effects the point-contact model misses, extend it, measure the gain",
-        description="Fit the point-contact model and its extensions (enveloping, lift_off, axle_coupling, "
-                    "nonlinear_stiffness, friction_damping, periodic_disturbance) to the measured hub acceleration, "
-                    "name the effects by forward selection (BIC plus physical evidence), and measure the gain by "
-                    "co-simulating the extended tire FMU(s) with fmpy.")
+        "diagnose", help="diagnose the whole tractor: every tire jointly under one body, the effects the "
+                         "point-contact model misses, the extended model, the gain",
+        description="Fit all channels jointly: four point-contact corners, then the rigid tractor (heave, pitch, roll; "
+                    "rigid or pivoting front axle) and the tire-side extensions (enveloping, lift_off, "
+                    "nonlinear_stiffness, friction_damping, periodic_disturbance), named by forward selection (BIC "
+                    "plus physical evidence); say what is left unexplained; measure the gain by co-simulating one "
+                    "extended tire FMU per wheel with fmpy.")
     p.add_argument("recording", metavar="REC.csv")
-    p.add_argument("--tire", metavar="TIRE", help="channel to diagnose (required when the recording has several)")
+    p.add_argument("--tire", metavar="TIRE", help="print one tire's result (per-tire JSON shape), from the joint fit")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
-    p.add_argument("--fmu", metavar="OUT.fmu",
-                   help="write the extended tire FMU (with axle_coupling also OUT_<other tire>.fmu)")
-    p.add_argument("--plot", metavar="OUT.png", help="write measured vs point-contact and extended models")
+    p.add_argument("--fmu", metavar="OUT.fmu", help="with --tire: write that tire's extended FMU")
+    p.add_argument("--fmu-dir", metavar="DIR", help="write one extended tire FMU per tire into DIR")
+    p.add_argument("--plot", metavar="OUT.png", help="write measured vs the corners and the final model, per channel")
     p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ, help="low-pass cut-off, Hz")
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
                    help="processes fitting candidate models in parallel (default: up to 2)")

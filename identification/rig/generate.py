@@ -72,6 +72,7 @@ def run_rig(effects=(), overrides: dict | None = None, *, seed: int = 0) -> RigR
     rng = np.random.default_rng(seed)
     speed = v["speed_kmh"] / 3.6
     L, stagger = v["vehicle.wheelbase_m"], v["cleat.stagger_m"]
+    # FL, FR, RL, RR; a negative stagger puts the right-hand cleat first (FR before FL, RR before RL)
     arrival = v["t0_s"] + np.array([0.0, stagger, L, L + stagger]) / speed
     front = [True, True, False, False]
     footprint = np.zeros(4)
@@ -96,6 +97,8 @@ def run_rig(effects=(), overrides: dict | None = None, *, seed: int = 0) -> RigR
     over = v["solver.oversample"]
     h = 1.0 / (fs * over)
     n_samples = int(round(v["duration_s"] * fs))
+    # start at rest before the earliest excitation of any tire (with a negative stagger, FR's; it may
+    # even precede t = 0, then the recording begins after that hit)
     first_excitation = min(road.excitation_interval(i)[0] for i in range(4))
     t_start = min(0.0, first_excitation - 0.05) - (_PRE_ROLL_S if lug_amp else 0.0)
     n_pre = int(np.ceil(-t_start / h - 1e-9))

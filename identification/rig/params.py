@@ -28,7 +28,7 @@ class Param:
     default: Any
     unit: str
     description: str
-    check: str = "positive"  # positive | nonnegative | int>=0 | int>=1 | channels | any
+    check: str = "positive"  # positive | nonnegative | int>=0 | int>=1 | flag (0 or 1) | channels | any
 
 
 def _table() -> dict[str, Param]:
@@ -38,7 +38,8 @@ def _table() -> dict[str, Param]:
         "t0_s": Param(0.5, "s", "time the front axle's contact point reaches the cleat's leading edge"),
         "cleat.height_m": Param(0.040, "m", "cleat height"),
         "cleat.width_m": Param(0.100, "m", "cleat width in the driving direction"),
-        "cleat.stagger_m": Param(0.0, "m", "right-hand cleat placed this far beyond the left one", "nonnegative"),
+        "cleat.stagger_m": Param(0.0, "m", "right-hand cleat placed this far beyond the left one "
+                                           "(negative: the left one beyond the right)", "any"),
         "vehicle.wheelbase_m": Param(2.77, "m", "wheelbase"),
         "vehicle.track_m": Param(1.90, "m", "track width (front and rear)"),
         "vehicle.mass_kg": Param(5528.0, "kg", "total mass; must equal the sum of wheel loads / g within 1 %"),
@@ -59,6 +60,10 @@ def _table() -> dict[str, Param]:
         "enveloping.footprint_rear_m": Param(0.38, "m", "rear footprint length"),
         "axle_coupling.pitch_dynamic_index": Param(0.8, "-", "pitch inertia / (M a b); 1 decouples the axles"),
         "axle_coupling.roll_gyration_m": Param(0.65, "m", "roll radius of gyration about the centre of gravity"),
+        "axle_coupling.front_axle_pivot": Param(0, "-", "0: front axle bolted to the body; 1: it rolls freely "
+                                                        "about a longitudinal pivot at the track centre", "flag"),
+        "axle_coupling.front_axle_roll_inertia_kg_m2": Param(120.0, "kg m2", "roll inertia of the front axle "
+                                                                             "about its pivot (with the pivot)"),
         "nonlinear_stiffness.exponent": Param(1.5, "-", "n in F = K delta^n (progressive for n > 1)"),
         "friction_damping.force_N": Param(300.0, "N", "Coulomb friction force of the tire"),
         "friction_damping.slip_velocity_m_s": Param(0.002, "m/s", "velocity scale of the tanh friction law"),
@@ -96,6 +101,10 @@ def _coerce(key: str, value: Any) -> Any:
         raise InputError("--param", f"{key} must be a number, got {value!r}") from None
     if not math.isfinite(num):
         raise InputError("--param", f"{key} must be finite, got {value!r}")
+    if spec.check == "flag":
+        if num not in (0.0, 1.0):
+            raise InputError("--param", f"{key} must be 0 or 1, got {value!r}")
+        return int(num)
     if spec.check.startswith("int"):
         if num != int(num) or num < int(spec.check[-1]):
             raise InputError("--param", f"{key} must be an integer >= {spec.check[-1]}, got {value!r}")
@@ -145,5 +154,6 @@ def parse_effects(text: str | list[str] | None) -> tuple[str, ...]:
 
 def describe() -> str:
     """The parameter table as text (``cleatfmu rig --list-params``)."""
-    rows = [f"{k:<38} {str(v.default):>12} {v.unit:<6} {v.description}" for k, v in PARAMS.items()]
+    width = max(len(k) for k in PARAMS)
+    rows = [f"{k:<{width}} {str(v.default):>12} {v.unit:<6} {v.description}" for k, v in PARAMS.items()]
     return "\n".join(rows)

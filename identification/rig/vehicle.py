@@ -1,13 +1,25 @@
 """Mechanics of the virtual tractor: generalized coordinates, tire force law, impulses.
 
-Two plants share one formulation, q̈ = M⁻¹ (Jᵀ F + G):
+The plants share one formulation, q̈ = M⁻¹ (Jᵀ F + G):
 
 * **corners** (baseline): four independent masses m_i = W_i / g, q = hub
   displacements from static equilibrium (m), J = I;
 * **rigid body** (``axle_coupling``): q = (heave z at the centre of gravity m,
   pitch θ rad nose-up, roll φ rad left-up), hub i at (ξ_i, η_i) from the
   centre of gravity moves by z + ξ_i θ + η_i φ.  The centre of gravity follows
-  from the static wheel loads; pitch inertia = dynamic index · M · a · b.
+  from the static wheel loads; pitch inertia = dynamic index · M · a · b;
+* **pivoting front axle** (``axle_coupling`` with ``front_axle_pivot = 1``):
+  q gains ψ rad, the front axle's absolute roll left-up about a longitudinal
+  pivot at the track centre (lateral position 0, carried by the body).  Front
+  hubs move by z + ξ_f θ − y_cg φ ± (track/2) ψ, rear hubs as for the rigid
+  body: the front tires act on the body's roll only through their sum.  The
+  body mass M = ΣW/g includes the axle; the axle adds the roll inertia I_axle.
+
+Mass matrix diag(M, I_pitch, I_roll[, I_axle]); generalized gravity
+G = −Jᵀ W, so that the static wheel loads W are the equilibrium.  It is
+written in closed form, with exact zeros where the centre of gravity makes
+a component vanish: (−M g, 0, 0) for the rigid body, and
+(−M g, 0, Δ, −Δ) with Δ = (track/2)(W_FL − W_FR) with the pivot.
 
 Tire force (compressive positive, N), with deflection δ = δ₀ + r − x (m) and
 rate δ̇ = ṙ − ẋ (m/s):
@@ -141,18 +153,7 @@ def build_plant(values: dict, effects: tuple[str, ...], road: RoadInput) -> Plan
     mass = load.sum() / g
     inertia: dict = {}
     if "axle_coupling" in effects:
-        L, track = values["vehicle.wheelbase_m"], values["vehicle.track_m"]
-        x = np.array([L, L, 0.0, 0.0])                              # from the rear axle, forward
-        yl = np.array([track / 2, -track / 2, track / 2, -track / 2])  # left positive
-        x_cg, y_cg = (load * x).sum() / load.sum(), (load * yl).sum() / load.sum()
-        a, b = L - x_cg, x_cg
-        i_pitch = values["axle_coupling.pitch_dynamic_index"] * mass * a * b
-        i_roll = mass * values["axle_coupling.roll_gyration_m"] ** 2
-        J = np.column_stack([np.ones(4), x - x_cg, yl - y_cg])
-        minv = 1.0 / np.array([mass, i_pitch, i_roll])
-        gravity = np.array([-mass * g, 0.0, 0.0])
-        inertia = {"mass_kg": mass, "pitch_inertia_kg_m2": i_pitch, "roll_inertia_kg_m2": i_roll,
-                   "cg_behind_front_axle_m": a, "cg_ahead_of_rear_axle_m": b, "cg_left_of_centre_m": y_cg}
+        J, minv, gravity, inertia = _rigid_body(values, load, mass)
     else:
         J = np.eye(4)
         minv = g / load
@@ -161,3 +162,33 @@ def build_plant(values: dict, effects: tuple[str, ...], road: RoadInput) -> Plan
     return Plant(J=J, minv=minv, gravity=gravity, k=k, c=c, load=load, defl0=defl0, exponent=exponent,
                  friction_N=float(friction), slip_m_s=float(values["friction_damping.slip_velocity_m_s"]),
                  unilateral="lift_off" in effects, road=road, mass_kg=mass, inertia=inertia)
+
+
+def _rigid_body(values: dict, load: np.ndarray, mass: float):
+    """J (4, n), inverse generalized masses (n,), gravity (n,) and the truth's "body" (``axle_coupling``)."""
+    L, track = values["vehicle.wheelbase_m"], values["vehicle.track_m"]
+    half = track / 2
+    x = np.array([L, L, 0.0, 0.0])                  # from the rear axle, forward
+    yl = np.array([half, -half, half, -half])       # left positive
+    x_cg, y_cg = (load * x).sum() / load.sum(), (load * yl).sum() / load.sum()
+    a, b = L - x_cg, x_cg
+    pitch_index = values["axle_coupling.pitch_dynamic_index"]
+    i_pitch = pitch_index * mass * a * b
+    i_roll = mass * values["axle_coupling.roll_gyration_m"] ** 2
+    body = {"mass_kg": mass, "pitch_inertia_kg_m2": i_pitch, "roll_inertia_kg_m2": i_roll,
+            "cg_behind_front_axle_m": a, "cg_ahead_of_rear_axle_m": b, "cg_left_of_centre_m": y_cg,
+            "pitch_dynamic_index": pitch_index, "roll_dynamic_index": i_roll / (mass * half ** 2)}
+    if not values["axle_coupling.front_axle_pivot"]:
+        J = np.column_stack([np.ones(4), x - x_cg, yl - y_cg])
+        gravity = np.array([-mass * STANDARD_GRAVITY, 0.0, 0.0])
+        return J, 1.0 / np.array([mass, i_pitch, i_roll]), gravity, dict(body, front_axle="rigid")
+    i_axle = values["axle_coupling.front_axle_roll_inertia_kg_m2"]
+    front = np.array([1.0, 1.0, 0.0, 0.0])
+    # the pivot sits at lateral position 0: the body's roll moves both front hubs by -y_cg φ
+    J = np.column_stack([np.ones(4), x - x_cg, np.where(front > 0, 0.0, yl) - y_cg, front * yl])
+    m_front = (load[0] + load[1]) / STANDARD_GRAVITY
+    moment = half * (load[0] - load[1])  # the front loads' roll moment about the pivot, N m
+    gravity = np.array([-mass * STANDARD_GRAVITY, 0.0, moment, -moment])
+    return J, 1.0 / np.array([mass, i_pitch, i_roll, i_axle]), gravity, dict(
+        body, front_axle="pivot", front_axle_roll_inertia_kg_m2=i_axle,
+        front_axle_roll_index=i_axle / (m_front * half ** 2))

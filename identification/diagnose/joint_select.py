@@ -1,0 +1,277 @@
+"""Whole-tractor diagnosis: forward selection of effects at the recording level, honest about what is left.
+
+Round by round every available effect (:data:`~identification.diagnose.tractor.EFFECTS`)
+is added to the current model and the extended model is fitted to all
+channels.  A candidate qualifies when its BIC (on n_eff = n · min(1, 2 f_c / f_s)
+independent samples per channel) improves by ≥ 10, it removes ≥ 25 % of the
+noise-weighted residual energy, its parameters lie within their physical
+bounds and it passes its physical gate
+(:mod:`~identification.diagnose.joint_evidence`).  The best qualifier is named;
+the selection stops when none qualifies.  Candidates are screened at a 2 ms
+step; the named model is refitted at 1 ms.
+
+Afterwards each channel's residual is compared with its noise floor: above
+1.5× the noise RMS the channel is flagged ``unexplained`` (share of the signal,
+window), and the intervals are marked as conditional on the model.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..recording import FRONT_TIRES
+from .joint_evidence import check_tractor
+from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
+from .joint_start import ENVELOPE_GUESS_M, body_start, refine_timing, starting_values
+from .tractor import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, parameter_unit
+
+__all__ = ["TractorDiagnosis", "diagnose_tractor", "TractorCandidate"]
+
+MIN_DELTA_BIC = 10.0
+MIN_GAIN = 0.25
+MAX_EFFECTS = 5
+SCREEN_STEP_S = 2e-3
+SCREEN_BUDGET = 150
+FINAL_BUDGET = 400
+_DEFAULTS = {"pitch_index": 0.9, "roll_index": 0.6, "pivot_index": 0.1, "exponent": 1.2, "friction": 100.0}
+
+
+@dataclass(frozen=True, eq=False)
+class TractorCandidate:
+    effect: str               # the effect(s) added, joined by "+"
+    fit: TractorFit
+    delta_bic: float
+    gain: float
+    passed_gate: bool
+    qualified: bool
+    evidence: dict            # effect -> sentence
+
+
+@dataclass(frozen=True, eq=False)
+class TractorDiagnosis:
+    """What the four-corner model misses in a recording, the extended model, and what is still unexplained."""
+
+    problem: TractorProblem
+    effects: list
+    baseline: TractorFit
+    final: TractorFit
+    rounds: list
+    evidence: dict
+    unexplained: dict          # channel -> None or {"share", "window", "residual_to_noise"}
+    seconds: float
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def channels(self) -> tuple:
+        return self.problem.channels
+
+    @property
+    def conditional(self) -> bool:
+        """The intervals hold only if the model is right: some channel keeps a residual above noise."""
+        return any(v is not None for v in self.unexplained.values())
+
+    def timings(self) -> dict:
+        out = {self.baseline.label: self.baseline.seconds}
+        for rnd in self.rounds:
+            for cand in rnd:
+                out[cand.fit.label] = cand.fit.seconds
+        return out
+
+    def noise_nrmse(self, tire: str) -> float:
+        pb = self.problem
+        meas = pb.measured[tire][pb.window]
+        return float(pb.noise[tire] / np.sqrt(np.mean(meas ** 2)))
+
+    def tire_parameters(self, tire: str) -> dict:
+        """The parameters of the final model that belong to one tire (its axle's, the shared ones)."""
+        fin = self.final
+        axle = "front" if tire in FRONT_TIRES else "rear"
+        out = {}
+        for name in fin.model.names:
+            parts = name.rsplit("_", 1)
+            if name in (f"k_{tire}", f"c_{tire}"):
+                key = parts[0]
+            elif len(parts) == 2 and parts[1] in ("FL", "FR", "RL", "RR", "front", "rear") and \
+                    parts[0] not in ("k", "c"):
+                if parts[1] not in (tire, axle):
+                    continue
+                key = parts[0]
+            elif len(parts) == 2 and parts[1] in ("FL", "FR", "RL", "RR"):
+                continue
+            else:
+                key = name
+            out[key] = {"value": float(fin.params[name]), "ci": [float(v) for v in fin.ci[name]],
+                        "unit": parameter_unit(name)[0]}
+        out["arrival"] = {"value": float(fin.model.arrivals(fin.params)[tire]), "ci": None, "unit": "s"}
+        return out
+
+    def to_json(self, *, nrmse_before: dict | None = None, nrmse_after: dict | None = None) -> dict:
+        """The ``diagnose --json`` document of the whole tractor (NRMSEs from the FMU runs when given)."""
+        fin, rec = self.final, self.problem.rec
+        before = nrmse_before or self.baseline.nrmse
+        after = nrmse_after or fin.nrmse
+
+        def value(name):
+            if name not in fin.params:
+                return None
+            return {"value": float(fin.params[name]), "ci": [float(v) for v in fin.ci[name]]}
+
+        delay = fin.params.get("delay")
+        tires = {}
+        for t in self.channels:
+            tires[t] = {"k": float(fin.params[f"k_{t}"]), "c": float(fin.params[f"c_{t}"]),
+                        "k_ci": [float(v) for v in fin.ci[f"k_{t}"]], "c_ci": [float(v) for v in fin.ci[f"c_{t}"]],
+                        "effects": list(self.effects), "parameters": self.tire_parameters(t),
+                        "nrmse_before": float(before[t]), "nrmse_after": float(after[t]),
+                        "noise_nrmse": self.noise_nrmse(t), "unexplained": self.unexplained[t]}
+        return {"recording": rec.source, "effects": list(self.effects),
+                "body": {"pitch_index": value("pitch_index"), "roll_index": value("roll_index"),
+                         "front_axle": "pivot" if "front_axle_pivot" in self.effects else "rigid",
+                         "speed_m_s": {"sidecar": float(rec.speed_m_s),
+                                       "from_delay": float(rec.wheelbase_m / delay) if delay else None}},
+                "tires": tires, "evidence": dict(self.evidence),
+                "intervals": "conditional on the model: it leaves a residual above the noise floor"
+                             if self.conditional else "the model explains the data to within noise"}
+
+    def tire_json(self, tire: str, *, nrmse_before: dict | None = None, nrmse_after: dict | None = None) -> dict:
+        """One tire in the per-tire ``diagnose --tire`` shape, from the joint fit."""
+        doc = self.to_json(nrmse_before=nrmse_before, nrmse_after=nrmse_after)
+        t = doc["tires"][tire]
+        return {"tire": tire, "effects": doc["effects"], "nrmse_before": t["nrmse_before"],
+                "nrmse_after": t["nrmse_after"], "k": t["k"], "c": t["c"], "k_ci": t["k_ci"], "c_ci": t["c_ci"],
+                "parameters": t["parameters"], "evidence": doc["evidence"]}
+
+
+def _bic(sse_w: float, n: int, n_eff: float, p: int) -> float:
+    return n_eff * math.log(sse_w / n) + p * math.log(n_eff)
+
+
+def _lug_start(pb: TractorProblem, tire: str, k: float, c: float, arrival: float):
+    """Frequency, road amplitude and phase of a steady periodic component before the impact in one channel."""
+    rec, t = pb.rec, pb.rec.time_s
+    pre = t < pb.first_impact_s - 0.05
+    if pre.sum() < 0.2 * rec.sample_rate_hz:
+        return None
+    x = rec.accel_m_s2[tire][pre] - np.mean(rec.accel_m_s2[tire][pre])
+    n = max(1 << 16, 1 << int(np.ceil(np.log2(4 * x.size))))
+    spec = np.abs(np.fft.rfft(x * np.hanning(x.size), n))
+    f = np.fft.rfftfreq(n, 1 / rec.sample_rate_hz)
+    band = (f >= 1.0) & (f <= 0.45 * pb.cutoff_hz)
+    freq = float(f[band][np.argmax(spec[band])])
+    w = 2 * np.pi * freq
+    b1, b2 = np.linalg.lstsq(np.column_stack([np.sin(w * t[pre]), np.cos(w * t[pre])]), x, rcond=None)[0]
+    m = rec.mass_kg(tire)
+    H = (k + 1j * w * c) / (k - m * w * w + 1j * w * c)
+    road = -(b1 + 1j * b2) / (w * w * H)
+    return freq, float(abs(road)), float(np.angle(road) + w * arrival)
+
+
+def _candidate_start(model: TractorFitModel, current: TractorFit, start0: dict) -> dict:
+    pb = model.problem
+    s = dict(current.params)
+    for name, v in _DEFAULTS.items():
+        s.setdefault(name, v)
+    for axle in pb.axles():
+        s.setdefault(f"footprint_{axle}", ENVELOPE_GUESS_M)
+    if "enveloping" in model.effects and "enveloping" not in current.model.effects:
+        s.update(start0["enveloped"])
+    if "periodic_disturbance" in model.effects and "periodic_disturbance" not in current.model.effects:
+        arrivals = current.model.arrivals(current.params)
+        for tire in pb.channels:
+            est = _lug_start(pb, tire, s[f"k_{tire}"], s[f"c_{tire}"], arrivals[tire]) or (10.0, 1e-4, 0.0)
+            axle = "front" if tire in FRONT_TIRES else "rear"
+            s.setdefault(f"lug_frequency_{axle}", est[0])
+            s[f"lug_amplitude_{tire}"], s[f"lug_phase_{tire}"] = est[1], est[2]
+    return {name: s[name] for name in model.names}
+
+
+def _try(job):
+    effects, current, new, start0 = job
+    model = TractorFitModel(effects, current.model.problem)
+    start = _candidate_start(model, current, start0)
+    if set(new) & set(BODY_EFFECTS):
+        start = body_start(model, start, step_s=SCREEN_STEP_S)
+    fit = fit_tractor(model, start, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET)
+    checks = [check_tractor(effect, fit, current) for effect in new]
+    return TractorCandidate("+".join(new), fit, math.nan, math.nan, all(ok for ok, _ in checks), False,
+                            {effect: text for effect, (_, text) in zip(new, checks)})
+
+
+def _judge(cand, current_sse, current_p, n, n_eff):
+    fit = cand.fit
+    sse = fit.weighted_sse()
+    gain = 1.0 - sse / current_sse
+    dbic = _bic(current_sse, n, n_eff, current_p) - _bic(sse, n, n_eff, len(fit.model.names))
+    qualified = bool(cand.passed_gate and fit.in_bounds and dbic >= MIN_DELTA_BIC and gain >= MIN_GAIN)
+    return TractorCandidate(cand.effect, fit, float(dbic), float(gain), cand.passed_gate, qualified, cand.evidence)
+
+
+def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress=None, workers: int = 1,
+                     channels=None) -> TractorDiagnosis:
+    """Diagnose every channel of a recording jointly under one body.
+
+    Parameters
+    ----------
+    rec : Recording
+    cutoff_hz : float
+        Low-pass cut-off of the comparison, Hz.
+    effects : iterable of str
+        Candidate effects (default: all eight).
+    progress : callable, optional
+        ``progress(label)`` before each model fit.
+    workers : int
+        Processes fitting a round's candidates in parallel.
+    channels : iterable of str, optional
+        Channels to use (default: all recorded).
+    """
+    from .select import _pool
+
+    t0 = time.perf_counter()
+    tick = progress or (lambda label: None)
+    pb = TractorProblem.from_recording(rec, cutoff_hz=cutoff_hz, channels=channels)
+    tick("starting values")
+    start0 = starting_values(pb)
+    tick("baseline")
+    base_model = TractorFitModel((), pb)
+    baseline = fit_tractor(base_model, refine_timing(base_model, {n: start0[n] for n in base_model.names}),
+                           budget=FINAL_BUDGET)
+    n = int(pb.window.sum()) * len(pb.channels)
+    n_eff = n * min(1.0, 2 * cutoff_hz / rec.sample_rate_hz)
+    current, selected, rounds, evidence = baseline, [], [], {}
+    pool = _pool(workers)
+    try:
+        while len(selected) < MAX_EFFECTS:
+            tries = [(e,) for e in effects if e not in selected and pb.available(e, selected)]
+            if ("axle_coupling",) in tries and ("roll_coupling",) in tries and len(pb.channels) == 4:
+                tries.append(("axle_coupling", "roll_coupling"))   # the rigid tractor in one step
+                if "front_axle_pivot" in effects:
+                    tries.append(("axle_coupling", "roll_coupling", "front_axle_pivot"))
+            if not tries:
+                break
+            jobs = [(selected + list(new), current, new, start0) for new in tries]
+            current_sse = sse_of(current.model, current.params, SCREEN_STEP_S)
+            rnd = []
+            for cand in (pool.map(_try, jobs) if pool else map(_try, jobs)):
+                tick(cand.fit.label)
+                rnd.append(_judge(cand, current_sse, len(current.model.names), n, n_eff))
+            rnd.sort(key=lambda c: (c.effect.count("+"), EFFECTS.index(c.effect.split("+")[0])))
+            rounds.append(rnd)
+            best = max((c for c in rnd if c.qualified), key=lambda c: c.delta_bic, default=None)
+            if best is None:
+                break
+            tick(f"refit {best.fit.label}")
+            current = fit_tractor(best.fit.model, refine_timing(best.fit.model, best.fit.params),
+                                  budget=FINAL_BUDGET)
+            selected += best.effect.split("+")
+            evidence.update(best.evidence)
+    finally:
+        if pool:
+            pool.shutdown()
+    left = {c: unexplained(pb, current.prediction, c) for c in pb.channels}
+    return TractorDiagnosis(problem=pb, effects=selected, baseline=baseline, final=current, rounds=rounds,
+                            evidence=evidence, unexplained=left, seconds=time.perf_counter() - t0,
+                            extra={"n_eff": n_eff, "start": start0})

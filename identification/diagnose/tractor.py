@@ -1,0 +1,263 @@
+"""The whole-tractor diagnosis problem and its fitting models: all channels of a recording, one body.
+
+A model is the four-corner baseline plus a set of effects.  Tire-side effects
+(:data:`TIRE_EFFECTS`) act on every tire, with parameters per axle where the
+rig or a real tractor differ front to rear (footprint, lug frequency and
+amplitude); body effects change the body (:class:`identification.model.Body`):
+
+``axle_coupling``
+    front/rear interference through pitch (half-tractors per side; with
+    ``roll_coupling`` the rigid tractor), parameter ``pitch_index``;
+``roll_coupling``
+    left/right interference through roll (axle pairs; with
+    ``axle_coupling`` the rigid tractor), parameter ``roll_index``;
+``front_axle_pivot``
+    the front axle rolls about a longitudinal pivot and carries no roll
+    moment to the body (needs both couplings), parameter ``pivot_index``.
+
+Every model fits each recorded tire's k and c and the arrivals: ``arrival``
+(the left front wheel's, s), ``stagger`` (right after left, s; when both sides
+are recorded) and ``delay`` (rear after front, s; when both axles are
+recorded - the speed it implies is wheelbase / delay).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import tire_law
+from ..errors import InputError
+from ..model import Body, Cleat, TractorModel
+from ..model.kernels import run_model
+from ..preprocess import DEFAULT_CUTOFF_HZ, lowpass, preprocess
+from ..recording import FRONT_TIRES, TIRES, Recording
+from .models import FRICTION_VELOCITY_M_S
+
+__all__ = ["EFFECTS", "TIRE_EFFECTS", "BODY_EFFECTS", "TractorProblem", "TractorFitModel", "parameter_unit"]
+
+TIRE_EFFECTS = ("enveloping", "lift_off", "nonlinear_stiffness", "friction_damping", "periodic_disturbance")
+BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
+EFFECTS = ("enveloping", "lift_off", "axle_coupling", "nonlinear_stiffness", "friction_damping",
+           "periodic_disturbance", "roll_coupling", "front_axle_pivot")
+
+_UNITS = {"k": ("N/m", "tire stiffness (tangent at the static load)"), "c": ("N s/m", "tire viscous damping"),
+          "arrival": ("s", "left front wheel reaches its cleat"), "stagger": ("s", "right wheels after the left"),
+          "delay": ("s", "rear axle after the front axle"), "pitch_index": ("-", "pitch inertia / (M a b)"),
+          "roll_index": ("-", "roll inertia / (M (track/2)^2)"),
+          "pivot_index": ("-", "front-axle roll inertia / (m_front (track/2)^2)"),
+          "footprint": ("m", "footprint length (uniform contact pressure)"),
+          "exponent": ("-", "exponent n of the progressive elastic law"), "friction": ("N", "Coulomb friction"),
+          "lug_amplitude": ("m", "road-equivalent amplitude of the periodic excitation"),
+          "lug_frequency": ("Hz", "frequency of the periodic excitation"),
+          "lug_phase": ("rad", "phase of the periodic excitation")}
+#: Signed parameters (the others are positive and fitted as logarithms).
+SIGNED = ("arrival", "stagger", "lug_amplitude", "lug_phase")
+UNLOADED_RADIUS_M = 0.75
+LEAD_S = 0.05
+PRE_S = 0.3
+DEFAULT_STEP_S = 1e-3
+
+
+def parameter_unit(name: str) -> tuple[str, str]:
+    """(unit, description) of a fitted parameter, e.g. ``k_FL`` or ``footprint_front``."""
+    return _UNITS[name if name in _UNITS else name.rsplit("_", 1)[0]]
+
+
+def _axle(tire: str) -> str:
+    return "front" if tire in FRONT_TIRES else "rear"
+
+
+@dataclass(frozen=True, eq=False)
+class TractorProblem:
+    """The data of a whole-tractor diagnosis: every channel, filtered, with its noise and the fit window."""
+
+    rec: Recording
+    channels: tuple
+    measured: dict            # channel -> low-passed acceleration, m/s² (whole record)
+    noise: dict               # channel -> noise RMS of the low-passed signal, m/s²
+    onsets: dict              # channel -> impact onset, s
+    dominant_hz: dict
+    window: np.ndarray        # bool mask over the samples
+    cutoff_hz: float
+    step_s: float
+    first_impact_s: float
+
+    @classmethod
+    def from_recording(cls, rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ,
+                       step_s: float = DEFAULT_STEP_S, channels=None) -> "TractorProblem":
+        channels = tuple(t for t in TIRES if t in (channels or rec.tires))
+        sigs = preprocess(rec, list(channels), cutoff_hz=cutoff_hz, min_peaks=0)
+        first = min(s.impact_s - (0.0 if s.tire in FRONT_TIRES else rec.rear_axle_delay_s())
+                    for s in sigs.values())
+        first = min(first, min(s.impact_s for s in sigs.values()))
+        t = rec.time_s
+        window = t >= max(t[0], first - LEAD_S)
+        if window.sum() < 20:
+            raise InputError(rec.source, "too few samples after the first impact to fit a model")
+        return cls(rec=rec, channels=channels, measured={c: sigs[c].filtered_m_s2 for c in channels},
+                   noise={c: max(sigs[c].noise_m_s2, 1e-6) for c in channels},
+                   onsets={c: sigs[c].impact_s for c in channels},
+                   dominant_hz={c: sigs[c].dominant_hz for c in channels}, window=window, cutoff_hz=cutoff_hz,
+                   step_s=step_s, first_impact_s=first)
+
+    @property
+    def both_sides(self) -> bool:
+        return any(t in ("FL", "RL") for t in self.channels) and any(t in ("FR", "RR") for t in self.channels)
+
+    @property
+    def both_axles(self) -> bool:
+        return any(t in FRONT_TIRES for t in self.channels) and any(t not in FRONT_TIRES for t in self.channels)
+
+    def axles(self) -> tuple:
+        return tuple(a for a in ("front", "rear") if any(_axle(t) == a for t in self.channels))
+
+    def available(self, effect: str, effects=()) -> bool:
+        """Whether `effect` can be added to a model with `effects` for these channels."""
+        chosen = set(effects)
+        if effect == "axle_coupling":
+            return self.both_axles and ("roll_coupling" not in chosen or len(self.channels) == 4)
+        if effect == "roll_coupling":
+            return self.both_sides and ("axle_coupling" not in chosen or len(self.channels) == 4)
+        if effect == "front_axle_pivot":
+            return len(self.channels) == 4 and {"axle_coupling", "roll_coupling"} <= chosen
+        return True
+
+
+class TractorFitModel:
+    """The baseline corners plus a set of effects over all channels, with its parameter vector."""
+
+    def __init__(self, effects, problem: TractorProblem):
+        self.effects = frozenset(effects)
+        unknown = self.effects - set(EFFECTS)
+        if unknown:
+            raise ValueError(f"unknown effects {sorted(unknown)}")
+        self.problem = pb = problem
+        names = []
+        for t in pb.channels:
+            names += [f"k_{t}", f"c_{t}"]
+        names.append("arrival")
+        if pb.both_sides:
+            names.append("stagger")
+        if pb.both_axles:
+            names.append("delay")
+        if "axle_coupling" in self.effects:
+            names.append("pitch_index")
+        if "roll_coupling" in self.effects:
+            names.append("roll_index")
+        if "front_axle_pivot" in self.effects:
+            names.append("pivot_index")
+        if "enveloping" in self.effects:
+            names += [f"footprint_{a}" for a in pb.axles()]
+        if "nonlinear_stiffness" in self.effects:
+            names.append("exponent")
+        if "friction_damping" in self.effects:
+            names.append("friction")
+        if "periodic_disturbance" in self.effects:
+            names += [f"lug_frequency_{a}" for a in pb.axles()]
+            for t in pb.channels:
+                names += [f"lug_amplitude_{t}", f"lug_phase_{t}"]
+        self.names = tuple(names)
+
+    @property
+    def label(self) -> str:
+        return "+".join(e for e in EFFECTS if e in self.effects) or "baseline"
+
+    def arrivals(self, theta: dict) -> dict:
+        """Each channel's cleat arrival, s."""
+        out = {}
+        for t in self.problem.channels:
+            a = theta["arrival"]
+            if t in ("FR", "RR"):
+                a += theta.get("stagger", 0.0)
+            if t not in FRONT_TIRES:
+                a += theta.get("delay", 0.0)
+            out[t] = a
+        return out
+
+    def law(self, theta: dict, tire: str) -> dict:
+        """The extended tire-law parameters of one tire."""
+        rec = self.problem.rec
+        p = dict(tire_law.EXTENDED_DEFAULTS)
+        p.update(stiffness=theta[f"k_{tire}"], damping=theta[f"c_{tire}"], unloaded_radius=UNLOADED_RADIUS_M,
+                 static_load=rec.wheel_load_N[tire], unilateral="lift_off" in self.effects)
+        if "enveloping" in self.effects:
+            p.update(footprint_length=theta[f"footprint_{_axle(tire)}"], cleat_x=0.0,
+                     cleat_height=rec.cleat_height_m, cleat_width=rec.cleat_width_m)
+        if "nonlinear_stiffness" in self.effects:
+            p.update(stiffness_exponent=theta["exponent"])
+        if "friction_damping" in self.effects:
+            p.update(friction_force=theta["friction"], friction_velocity=FRICTION_VELOCITY_M_S)
+        if "periodic_disturbance" in self.effects:
+            p.update(lug_amplitude=theta[f"lug_amplitude_{tire}"],
+                     lug_pitch=rec.speed_m_s / theta[f"lug_frequency_{_axle(tire)}"],
+                     lug_phase=theta[f"lug_phase_{tire}"])
+        return p
+
+    def body(self, theta: dict) -> Body:
+        pb, rec = self.problem, self.problem.rec
+        return Body(tires=pb.channels, loads_n=tuple(rec.wheel_load_N[t] for t in pb.channels),
+                    wheelbase_m=rec.wheelbase_m, pitch="axle_coupling" in self.effects,
+                    roll="roll_coupling" in self.effects, pivot="front_axle_pivot" in self.effects,
+                    pitch_index=theta.get("pitch_index", 1.0), roll_index=theta.get("roll_index", 1.0),
+                    pivot_index=theta.get("pivot_index", 0.05))
+
+    def record(self, theta: dict) -> TractorModel:
+        """The model record (body, tires, cleat, arrivals) for parameters `theta`."""
+        rec = self.problem.rec
+        arrivals = self.arrivals(theta)
+        return TractorModel(body=self.body(theta), laws=tuple(self.law(theta, t) for t in self.problem.channels),
+                            cleat=Cleat(rec.cleat_height_m, rec.cleat_width_m, rec.speed_m_s),
+                            arrivals_s=tuple(arrivals[t] for t in self.problem.channels))
+
+    def grid(self, record: TractorModel, step_s: float | None = None):
+        pb, rec = self.problem, self.problem.rec
+        return record.grid(pb.first_impact_s - PRE_S, rec.time_s[-1] + 0.01, step_s or pb.step_s,
+                           1.0 / rec.sample_rate_hz)
+
+    def simulate(self, theta: dict, *, step_s: float | None = None):
+        record = self.record(theta)
+        return run_model(record, *self.grid(record, step_s))
+
+    def predict(self, theta: dict, *, step_s: float | None = None, trajectory=None) -> dict:
+        """Low-passed predicted acceleration per channel on the recording's time base, m/s²."""
+        pb, rec = self.problem, self.problem.rec
+        traj = trajectory if trajectory is not None else self.simulate(theta, step_s=step_s)
+        fs = rec.sample_rate_hz
+        return {t: lowpass(traj.mean_acceleration(i, rec.time_s, 1.0 / fs), sample_rate_hz=fs,
+                           cutoff_hz=pb.cutoff_hz) for i, t in enumerate(pb.channels)}
+
+    def bounds(self, start: dict) -> tuple[dict, dict]:
+        """Physical bounds (lower, upper) around the starting values."""
+        rec = self.problem.rec
+        lo, hi = {}, {}
+        for name in self.names:
+            base = name.rsplit("_", 1)[0] if name not in _UNITS else name
+            s = start[name]
+            if base == "k":
+                lo[name], hi[name] = 0.2 * s, 5.0 * s
+            elif base == "c":
+                lo[name], hi[name] = 0.0, 5.0 * s + 2000.0
+            elif base in ("arrival", "stagger"):
+                lo[name], hi[name] = s - 0.2, s + 0.2
+            elif base == "delay":
+                lo[name], hi[name] = 0.7 * s, 1.3 * s
+            elif base in ("pitch_index", "roll_index"):
+                lo[name], hi[name] = 0.05, 5.0
+            elif base == "pivot_index":
+                lo[name], hi[name] = 1e-3, 3.0
+            elif base == "footprint":
+                lo[name], hi[name] = 0.01, 1.5
+            elif base == "exponent":
+                lo[name], hi[name] = 0.3, 4.0
+            elif base == "friction":
+                lo[name], hi[name] = 0.0, 0.5 * min(rec.wheel_load_N.values())
+            elif base == "lug_amplitude":
+                lo[name], hi[name] = -0.05, 0.05
+            elif base == "lug_frequency":
+                lo[name], hi[name] = 0.9 * s, 1.1 * s
+            else:   # lug_phase: wrapped, not bounded
+                lo[name], hi[name] = -math.inf, math.inf
+        return lo, hi

@@ -1,0 +1,148 @@
+"""The whole-tractor model record and its stepping: compiled = plain Python, and both = python-control."""
+
+import control
+import numpy as np
+import pytest
+
+from identification import tire_law
+from identification.model import Body, Cleat, TractorModel
+from identification.model.kernels import run_model
+from identification.model.stepping import run_model_python
+from identification.preprocess import lowpass
+from identification.recording import STANDARD_GRAVITY
+
+TIRES = ("FL", "FR", "RL", "RR")
+LOADS = (11460.0, 11600.0, 15650.0, 15510.0)
+K = (550e3, 520e3, 420e3, 450e3)
+C = (4200.0, 4300.0, 2400.0, 2500.0)
+L, V, H, W = 2.77, 7 / 3.6, 0.04, 0.10
+ARRIVALS = (0.5013, 0.5013 + 0.11, 0.5013 + L / V, 0.5013 + L / V + 0.11)
+BODIES = [dict(), dict(pitch=True), dict(roll=True), dict(pitch=True, roll=True),
+          dict(pitch=True, roll=True, pivot=True)]
+
+
+def _record(body_kw, *, options=None, seed=0):
+    rng = np.random.default_rng(seed)
+    body = Body(TIRES, LOADS, L, pitch_index=0.8, roll_index=0.47, pivot_index=0.06, **body_kw)
+    laws = []
+    for i, (w, k, c) in enumerate(zip(LOADS, K, C)):
+        p = dict(tire_law.EXTENDED_DEFAULTS, stiffness=k, damping=c, static_load=w)
+        for opt in options or ():
+            if opt == "footprint":
+                p.update(footprint_length=rng.uniform(0.2, 0.5), cleat_height=H, cleat_width=W)
+            elif opt == "unilateral":
+                p.update(unilateral=True)
+            elif opt == "exponent":
+                p.update(stiffness_exponent=rng.uniform(1.2, 1.8))
+            elif opt == "friction":
+                p.update(friction_force=rng.uniform(100, 400), friction_velocity=0.01)
+            elif opt == "lugs":
+                p.update(lug_amplitude=1e-3, lug_pitch=rng.uniform(0.15, 0.3), lug_phase=rng.uniform(0, 6))
+        laws.append(p)
+    return TractorModel(body, tuple(laws), Cleat(0.06 if "unilateral" in (options or ()) else H, W, V), ARRIVALS)
+
+
+@pytest.mark.parametrize("options", [(), ("footprint",), ("unilateral",), ("exponent",), ("friction",), ("lugs",),
+                                     ("footprint", "unilateral", "exponent", "friction", "lugs")])
+@pytest.mark.parametrize("body", BODIES, ids=lambda b: "+".join(b) or "corners")
+def test_compiled_stepping_equals_the_reference(body, options):
+    model = _record(body, options=options, seed=len(options))
+    grid = model.grid(0.2, 3.0, 1e-3, 1e-3)
+    a, b = run_model(model, *grid), run_model_python(model, *grid)
+    for name in ("hub_accel_m_s2", "hub_vz_m_s", "force_n"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert np.max(np.abs(x - y)) <= 1e-12 * np.max(np.abs(y)), name
+    flat = [(np.array(x), np.array(y)) for x, y in zip(a.impulses, b.impulses)]
+    assert all(x.shape == y.shape and np.allclose(x, y, rtol=1e-12, atol=0) for x, y in flat)
+
+
+def _geometry(pivot):
+    """J and masses of the rigid tractor from geometry (track 1.9 m), independently of the model code."""
+    g = STANDARD_GRAVITY
+    Wt = np.array(LOADS)
+    M = Wt.sum() / g
+    a = L * (Wt[2] + Wt[3]) / Wt.sum()
+    b = L - a
+    half = 0.95
+    y = np.array([half, -half, half, -half])
+    ycg = (Wt * y).sum() / Wt.sum()
+    x = np.array([a, a, -b, -b])
+    cols = [np.ones(4), x, y - ycg]
+    inertia = [M, 0.8 * M * a * b, 0.47 * M * half ** 2]
+    if pivot:
+        cols[2] = np.array([-ycg, -ycg, half - ycg, -half - ycg])
+        cols.append(np.array([half, -half, 0.0, 0.0]))
+        inertia.append(0.06 * (Wt[0] + Wt[1]) / g * half ** 2)
+    return np.column_stack(cols), np.diag(inertia)
+
+
+def _control_mean_acceleration(pivot, times, ts):
+    """Mean hub accelerations over each sample interval from python-control (road-rate impulses at the edges)."""
+    J, Mm = _geometry(pivot)
+    nq = J.shape[1]
+    k, c = np.diag(K), np.diag(C)
+    Minv = np.linalg.inv(Mm)
+    # states (q, q', r1..r4), inputs the road rates
+    A = np.zeros((2 * nq + 4, 2 * nq + 4))
+    A[:nq, nq:2 * nq] = np.eye(nq)
+    A[nq:2 * nq, :nq] = -Minv @ J.T @ k @ J
+    A[nq:2 * nq, nq:2 * nq] = -Minv @ J.T @ c @ J
+    A[nq:2 * nq, 2 * nq:] = Minv @ J.T @ k
+    B = np.zeros((2 * nq + 4, 4))
+    B[nq:2 * nq, :] = Minv @ J.T @ c
+    B[2 * nq:, :] = np.eye(4)
+    Cout = np.hstack([np.zeros((4, nq)), J, np.zeros((4, 4))])
+    sys = control.ss(A, B, Cout, np.zeros((4, 4)))
+    dt = 2e-5
+    grid = np.arange(0.0, times[-1] + 0.5, dt)
+    resp = control.impulse_response(sys, grid)
+    out = np.zeros((4, times.size))
+    for i, t_arr in enumerate(ARRIVALS):
+        for edge, sign in ((t_arr, 1.0), (t_arr + W / V, -1.0)):
+            for hub in range(4):
+                y = np.asarray(resp.outputs[hub, i])
+
+                def vel(t):
+                    tau = t - edge
+                    return np.where(tau >= 0, sign * H * np.interp(np.clip(tau, 0, None), grid, y), 0.0)
+                out[hub] += (vel(times + ts / 2) - vel(times - ts / 2)) / ts
+    return out
+
+
+@pytest.mark.parametrize("pivot", [False, True], ids=["rigid", "pivot"])
+def test_tractor_stepping_matches_python_control_and_converges(pivot):
+    ts = 1e-3
+    times = np.arange(0.3, 3.2, ts)
+    ref = np.array([lowpass(r, sample_rate_hz=1 / ts) for r in _control_mean_acceleration(pivot, times, ts)])
+    errors = []
+    for h in (1e-3, 5e-4, 2.5e-4, 1.25e-4):
+        model = _record(dict(pitch=True, roll=True, pivot=pivot))
+        traj = run_model(model, *model.grid(0.1, 3.3, h, ts))
+        sim = np.array([lowpass(traj.mean_acceleration(i, times, ts), sample_rate_hz=1 / ts) for i in range(4)])
+        errors.append(max(float(np.sqrt(np.mean((s - r) ** 2) / np.mean(r ** 2))) for s, r in zip(sim, ref)))
+    assert errors[-1] <= 0.005, errors
+    assert errors[0] > errors[1] > errors[2] > errors[3], errors
+
+
+def test_track_width_does_not_enter():
+    """With the roll coordinate scaled by the half-track, only the roll index enters (two tracks, same J)."""
+    body = Body(TIRES, LOADS, L, pitch=True, roll=True, roll_index=0.5)
+    J, mass, names = body.matrices()
+    for half in (0.8, 1.1):
+        Jg, Mg = _geometry(False) if half == 0.95 else (None, None)
+        y = np.array([half, -half, half, -half])
+        ycg = (np.array(LOADS) * y).sum() / sum(LOADS)
+        # physical roll angle phi: hub displacement (y - ycg) phi = (y - ycg)/half * w with w = half phi
+        assert np.allclose(J[:, 2], (y - ycg) / half)
+    assert names == ("heave", "pitch", "roll")
+    assert mass[2] == pytest.approx(0.5 * sum(LOADS) / STANDARD_GRAVITY)
+
+
+def test_pivot_front_axle_carries_no_roll_moment():
+    J, _, _ = Body(TIRES, LOADS, L, pitch=True, roll=True, pivot=True).matrices()
+    # equal and opposite front forces: no generalized force on the body's heave, pitch and roll
+    f = np.array([100.0, -100.0, 0.0, 0.0])
+    gen = J.T @ f
+    assert np.allclose(gen[:3], 0.0) and gen[3] == pytest.approx(200.0)
+    Jr, _, _ = Body(TIRES, LOADS, L, pitch=True, roll=True).matrices()
+    assert abs((Jr.T @ f)[2]) > 100.0           # a rigid front axle rolls the body
