@@ -194,7 +194,10 @@ def _try(job):
     model = TractorFitModel(effects, current.model.problem)
     start = _candidate_start(model, current, start0)
     if set(new) & set(BODY_EFFECTS):
-        start = body_start(model, start, step_s=SCREEN_STEP_S)
+        # the current model's k absorb the motion it lacks: scan around them and around the waveform fits
+        fresh = dict(start, **{n: start0[n] for n in model.names if n[:2] in ("k_", "c_")})
+        options = [body_start(model, s, step_s=SCREEN_STEP_S) for s in (start, fresh)]
+        start = min(options, key=lambda s: sse_of(model, s, SCREEN_STEP_S))
     fit = fit_tractor(model, start, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET)
     checks = [check_tractor(effect, fit, current) for effect in new]
     return TractorCandidate("+".join(new), fit, math.nan, math.nan, all(ok for ok, _ in checks), False,

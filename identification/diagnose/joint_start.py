@@ -125,7 +125,7 @@ def _timing(pb: TractorProblem, start: dict, footprint_m: float) -> dict:
     return start
 
 
-_MULTIPLIERS = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.15, 1.3)
+_MULTIPLIERS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.15, 1.3, 1.6)
 
 
 def body_start(model, start: dict, *, step_s: float) -> dict:

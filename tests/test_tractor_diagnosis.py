@@ -1,0 +1,100 @@
+"""Whole-tractor diagnosis: all channels jointly under one body, judged against the rig's truth.
+
+The diagnosis reads only the recording; the truth (or the embedded test day's
+truth file) is used to judge it.
+"""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from identification.diagnose.joint_select import diagnose_tractor
+from identification.diagnose.tractor import TIRE_EFFECTS
+from identification.recording import read_recording
+from identification.rig import run_rig, write_run
+
+DATA = Path(__file__).parents[1] / "identification" / "data"
+
+
+def _assert_tires(diag, truth, k_rel=0.03, c_rel=0.10):
+    for tire in diag.channels:
+        assert diag.final.params[f"k_{tire}"] == pytest.approx(truth["tires"][tire]["k"], rel=k_rel), tire
+        assert diag.final.params[f"c_{tire}"] == pytest.approx(truth["tires"][tire]["c"], rel=c_rel), tire
+
+
+@pytest.fixture(scope="module")
+def staggered():
+    """A rigid tractor (heave, pitch, roll), right cleat 0.2 m beyond the left, asymmetric tires."""
+    run = run_rig(("axle_coupling",), {"cleat.stagger_m": 0.2, "speed_kmh": 7.0, "tire.FR.k_N_m": 480e3,
+                                       "tire.RR.c_Ns_m": 2900.0}, seed=5)
+    return run, diagnose_tractor(run.recording, workers=1)
+
+
+def test_staggered_rigid_tractor_names_pitch_and_roll_and_recovers_every_tire(staggered):
+    run, diag = staggered
+    assert {"axle_coupling", "roll_coupling"} <= set(diag.effects), diag.effects
+    _assert_tires(diag, run.truth)
+    body = run.truth["body"]
+    assert diag.final.params["pitch_index"] == pytest.approx(body["pitch_dynamic_index"], rel=0.10)
+    assert diag.final.params["roll_index"] == pytest.approx(body["roll_dynamic_index"], rel=0.10)
+    # the arrivals: stagger and the speed the front/rear delay implies
+    truth_stagger = run.truth["tires"]["FR"]["arrival_s"] - run.truth["tires"]["FL"]["arrival_s"]
+    assert diag.final.params["stagger"] == pytest.approx(truth_stagger, abs=2e-3)
+    doc = diag.to_json()
+    assert doc["body"]["speed_m_s"]["from_delay"] == pytest.approx(7 / 3.6, rel=0.01)
+    assert doc["body"]["front_axle"] == "rigid"
+    assert "roll_coupling" in doc["evidence"] and "shows in" in doc["evidence"]["roll_coupling"]
+
+
+def test_never_a_false_all_clear_without_the_true_effect(staggered):
+    """Without the body among the candidates, the corners cannot explain a rigid tractor: say so, per channel."""
+    run, _ = staggered
+    diag = diagnose_tractor(run.recording, effects=TIRE_EFFECTS, workers=1)
+    assert not {"axle_coupling", "roll_coupling"} & set(diag.effects)
+    doc = diag.to_json()
+    for tire, t in doc["tires"].items():
+        assert t["unexplained"] is not None, tire
+        assert t["unexplained"]["share"] > 0.01
+        assert t["nrmse_after"] > 3 * t["noise_nrmse"]
+    assert doc["intervals"].startswith("conditional")
+
+
+def test_embedded_test_day_every_tire_within_tolerance():
+    rec = read_recording(DATA / "testday_7kmh.csv")
+    truth = json.loads((DATA / "testday_7kmh.truth.json").read_text())
+    diag = diagnose_tractor(rec, workers=1)
+    assert {"enveloping", "axle_coupling", "roll_coupling"} <= set(diag.effects), diag.effects
+    _assert_tires(diag, truth)
+
+
+def test_aligned_symmetric_corners_name_no_body_coupling():
+    run = run_rig((), {"speed_kmh": 10.0, "sensor.rate_hz": 1000}, seed=2)
+    diag = diagnose_tractor(run.recording, workers=1)
+    assert not {"axle_coupling", "roll_coupling", "front_axle_pivot"} & set(diag.effects), diag.effects
+    _assert_tires(diag, run.truth, k_rel=0.01, c_rel=0.03)
+
+
+def test_cli_whole_tractor_json_and_one_fmu_per_tire(cli, tmp_path):
+    run = run_rig(("enveloping",), {"speed_kmh": 10.0}, seed=8)
+    csv_path, truth_path = write_run(run, tmp_path / "rec")
+    truth_path.unlink()
+    fmus = tmp_path / "fmus"
+    fmus.mkdir()
+    res = cli("diagnose", csv_path, "--json", "--fmu-dir", fmus, "--workers", "1")
+    assert res.code == 0, res.err
+    doc = json.loads(res.out)
+    assert set(doc) >= {"recording", "effects", "body", "tires", "evidence"}
+    assert set(doc["body"]) >= {"pitch_index", "roll_index", "front_axle", "speed_m_s"}
+    assert doc["effects"][:1] == ["enveloping"]
+    for tire, t in doc["tires"].items():
+        assert set(t) >= {"k", "c", "k_ci", "c_ci", "effects", "parameters", "nrmse_before", "nrmse_after",
+                          "noise_nrmse", "unexplained"}
+        assert t["k"] == pytest.approx(run.truth["tires"][tire]["k"], rel=0.03)
+        assert t["nrmse_after"] < t["nrmse_before"] / 2
+    from fmpy.validation import validate_fmu
+    paths = sorted(fmus.glob("*.fmu"))
+    assert [p.name for p in paths] == [f"rec_{t}.fmu" for t in ("FL", "FR", "RL", "RR")]
+    assert all(validate_fmu(str(p)) == [] for p in paths)
+    bad = cli("diagnose", csv_path, "--fmu", tmp_path / "x.fmu")
+    assert bad.code == 2 and "--tire" in bad.err and len(bad.err.strip().splitlines()) == 1
