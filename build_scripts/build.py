@@ -23,7 +23,7 @@ from pathlib import Path
 from .kinds import FmuKind, load_kind, module_source
 from .model_description import complete_model_description
 
-__all__ = ["build_fmu", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
+__all__ = ["BACKENDS", "build_fmu", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
 
 #: pythonfmu versions whose FMI wrapper the FMU-side workarounds
 #: (``fmu_src/pythonfmu_wrapper.py``) were written and tested for.
@@ -124,8 +124,13 @@ def _run_pythonfmu(kind: FmuKind, stage: Path, out_dir: Path, starts: dict, prov
             raise ValueError(f"FMU kind {kind.name}: {exc}") from None
 
 
+#: Backends of :func:`build_fmu`.
+BACKENDS = ("pythonfmu", "native")
+
+
 def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: dict | None = None,
-              description: str | None = None) -> Path:
+              description: str | None = None, backend: str = "pythonfmu", fmi_version: int = 2,
+              platforms=None) -> Path:
     """Build an FMU of `kind` whose inputs and parameters start at `start_values`.
 
     Parameters
@@ -143,6 +148,16 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
         FMU's start-value file.
     description : str, optional
         Model description (default: the slave class's own).
+    backend : {"pythonfmu", "native"}
+        ``"pythonfmu"``: the Python slave of ``fmu_src/<kind>`` (needs Python
+        on the importing machine); ``"native"``: the C implementation of
+        ``fmu_src/native`` (no Python needed; its hub starts at the static
+        equilibrium unless ``hub_z`` is given, see
+        :func:`build_scripts.native_fmu.equilibrium_starts`).
+    fmi_version : int
+        FMI version of a native FMU (2).
+    platforms : iterable of str, optional
+        Platforms of a native FMU (default: all, see :data:`build_scripts.native.PLATFORMS`).
 
     Returns
     -------
@@ -160,8 +175,12 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
         raise ValueError(f"{dest}: an FMU file name must end with .fmu")
     if not dest.parent.is_dir():
         raise ValueError(f"{dest.parent}: no such directory")
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r} (known: {', '.join(BACKENDS)})")
     k = load_kind(kind)
     starts = resolve_start_values(k, start_values)
+    if backend == "native":
+        return _build_native(k, dest, starts, start_values or {}, provenance, description, fmi_version, platforms)
     fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=".fmu.part", dir=dest.parent)
     os.close(fd)
     tmp = Path(tmp_name)
@@ -177,6 +196,36 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
                     if info.filename == "modelDescription.xml":
                         data = _finish_xml(data, k, starts, description)
                     zout.writestr(info.filename, data)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, dest)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return dest
+
+
+def _build_native(k, dest: Path, starts, given, provenance, description, fmi_version, platforms) -> Path:
+    from identification.tire_law import extended_parameter_problem, parameter_problem
+
+    from .native_fmu import equilibrium_starts, native_fmu_bytes
+
+    law = {n: starts[n] for n in k.names("parameter")}
+    problem = (extended_parameter_problem(law) if "static_load" in law
+               else parameter_problem(law["stiffness"], law["damping"], law["unloaded_radius"]))
+    if problem is not None:
+        raise ValueError(f"FMU kind {k.name}: invalid start values: {problem}")
+    starts = equilibrium_starts(k, starts, given)
+    if description is None:
+        description = k.native.get("description") or f"cleatfmu {k.name} tire (native C), SI units"
+    data = native_fmu_bytes(k, starts, description=description, version=project_version(), fmi_version=fmi_version,
+                            platforms=platforms, provenance=provenance)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=".fmu.part", dir=dest.parent)
+    tmp = Path(tmp_name)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)

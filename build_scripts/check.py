@@ -1,6 +1,6 @@
 """``python -m build_scripts.check``: build and check every FMU kind in ``fmu_src``.
 
-For each kind:
+For each kind and backend (pythonfmu, native C):
 
 1. build the FMU (:func:`build_scripts.build_fmu`) with the kind's default
    start values;
@@ -19,6 +19,9 @@ For each kind:
 5. if the kind declares FMU-state support: get/set and serialize/deserialize
    round trips must reproduce the outputs bit for bit.
 
+For the native backend, the default experiment (no inputs) must also show
+the static equilibrium: force_z = the default static wheel load throughout.
+
 Across kinds, module names and model identifiers must be unique.  Exit status
 0 if everything passes, 1 otherwise (problems on stderr).
 """
@@ -33,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .build import build_fmu, resolve_start_values
+from .build import BACKENDS, build_fmu, resolve_start_values
 from .compliance import compliance_problems
 from .kinds import kind_names, load_kind, module_name_conflicts
 from .reference import read_reference
@@ -111,18 +114,19 @@ def state_round_trip_problems(fmu, signals: dict, outputs, start_values: dict | 
     return problems
 
 
-def check_kind(kind: str, workdir: Path, log=print) -> list[str]:
-    """All checks of one kind (FMU built in `workdir`); returns the problems found."""
+def check_kind(kind: str, workdir: Path, log=print, backend: str = "pythonfmu") -> list[str]:
+    """All checks of one kind and backend (FMU built in `workdir`); returns the problems found."""
     k = load_kind(kind)
     t0 = time.perf_counter()
-    fmu = build_fmu(kind, workdir / f"{kind}.fmu")
+    fmu = build_fmu(kind, workdir / f"{kind}_{backend}.fmu", backend=backend)
+    kind = f"{kind} ({backend})"
     log(f"{kind}: built {fmu.name} ({time.perf_counter() - t0:.1f} s)")
     problems = [f"compliance: {p}" for p in compliance_problems(fmu)]
     if problems:
         return problems
     log(f"{kind}: validate_fmu == [] and compliance checks pass")
 
-    ref = read_reference(kind)
+    ref = read_reference(k.name)
     outputs = k.names("output")
     inputs = k.names("input")
     missing = [n for n in ["time", *inputs, *outputs] if n not in ref]
@@ -158,10 +162,35 @@ def check_kind(kind: str, workdir: Path, log=print) -> list[str]:
     return problems
 
 
+def native_problems(kind: str, workdir: Path, log=print) -> list[str]:
+    """Checks of the native FMU beyond the common ones: the default experiment shows the static equilibrium.
+
+    Built with the kind's default start values, simulated without inputs, the
+    FMU must give force_z = the default static wheel load (N) throughout and be
+    in contact (the hub starts at the static equilibrium, off the built-in cleat).
+    """
+    from .native_fmu import DEFAULT_STATIC_LOAD_N
+    from fmpy import simulate_fmu
+
+    fmu = workdir / f"{kind}_native.fmu"
+    res = simulate_fmu(str(fmu), output=["force_z", "in_contact"])
+    force = np.asarray(res["force_z"], dtype=float)
+    problems = []
+    if not np.allclose(force, DEFAULT_STATIC_LOAD_N, rtol=1e-9) or not np.all(res["in_contact"]):
+        problems.append(f"default experiment: force_z from {force.min()!r} to {force.max()!r} N, "
+                        f"expected the static load {DEFAULT_STATIC_LOAD_N} N throughout")
+    else:
+        log(f"{kind} (native): default experiment shows the static equilibrium ({DEFAULT_STATIC_LOAD_N} N)")
+    return problems
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m build_scripts.check", description=__doc__.split("\n\n")[0])
     parser.add_argument("kinds", nargs="*", help="kinds to check (default: all in fmu_src)")
+    parser.add_argument("--backend", choices=BACKENDS, action="append",
+                        help="backend(s) to check (default: all)")
     args = parser.parse_args(argv)
+    backends = args.backend or list(BACKENDS)
     kinds = args.kinds or kind_names()
     if not kinds:
         print("check: no FMU kinds found in fmu_src", file=sys.stderr)
@@ -169,10 +198,13 @@ def main(argv=None) -> int:
     failures = [f"module names: {p}" for p in module_name_conflicts([load_kind(k) for k in kind_names()])]
     with tempfile.TemporaryDirectory(prefix="cleatfmu_check_") as tmp:
         for kind in kinds:
-            try:
-                failures += [f"{kind}: {p}" for p in check_kind(kind, Path(tmp))]
-            except Exception as exc:  # a failing kind must not hide the others
-                failures.append(f"{kind}: {type(exc).__name__}: {exc}")
+            for backend in backends:
+                try:
+                    failures += [f"{kind} ({backend}): {p}" for p in check_kind(kind, Path(tmp), backend=backend)]
+                except Exception as exc:  # a failing kind must not hide the others
+                    failures.append(f"{kind} ({backend}): {type(exc).__name__}: {exc}")
+                if backend == "native":
+                    failures += [f"{kind} (native): {p}" for p in native_problems(kind, Path(tmp))]
     for problem in failures:
         print(f"check: FAIL {problem}", file=sys.stderr)
     print(f"check: {len(kinds)} FMU kind(s), {'all passed' if not failures else f'{len(failures)} problem(s)'}")

@@ -1,0 +1,159 @@
+"""Cross-compilation of the native (C) tire FMUs with zig, cached per platform and law version.
+
+The C sources live in ``fmu_src/native``: the law (``cleatfmu_law.c``), the
+model (``cleatfmu_model.c``), the resource reader (``cleatfmu_resources.c``)
+and the FMI layer (``fmi2_functions.c``), one ``config.h`` per kind
+(``fmu_src/native/<kind>/config.h``); the FMI headers are the ones fmpy ships
+(``fmpy/c-code``).  :func:`compile_binary` builds one shared library with
+``python -m ziglang cc -target ...`` and keeps it in the cache
+(:func:`cache_dir`) under the SHA-256 of the sources, the target and the
+flags, so an export after the first one compiles nothing.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+from importlib import resources
+from pathlib import Path
+
+from .kinds import FmuKind
+
+__all__ = ["PLATFORMS", "FMI_VERSIONS", "cache_dir", "source_files", "law_version", "compile_binary",
+           "compile_binaries", "config_problems"]
+
+#: FMI version -> {platform folder in binaries/: (zig target, file extension)}.
+PLATFORMS = {
+    2: {"linux64": ("x86_64-linux-gnu.2.17", ".so"),
+        "win64": ("x86_64-windows-gnu", ".dll"),
+        "darwin64": ("x86_64-macos", ".dylib")},
+}
+FMI_VERSIONS = tuple(PLATFORMS)
+
+_COMMON = ("cleatfmu_law.h", "cleatfmu_law.c", "cleatfmu_model.h", "cleatfmu_model.c", "cleatfmu_resources.h",
+           "cleatfmu_resources.c")
+_FMI_LAYER = {2: ("fmi2_functions.c",)}
+_FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")}
+_FLAGS = ("-shared", "-std=c99", "-O2", "-g0", "-fvisibility=hidden", "-ffp-contract=off", "-fno-fast-math")
+#: Environment variable that overrides the cache folder.
+CACHE_ENV = "CLEATFMU_CACHE_DIR"
+
+
+def cache_dir() -> Path:
+    """Folder of the compiled binaries: $CLEATFMU_CACHE_DIR, else $XDG_CACHE_HOME/cleatfmu, else ~/.cache/cleatfmu."""
+    if os.environ.get(CACHE_ENV):
+        return Path(os.environ[CACHE_ENV])
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base, "cleatfmu")
+
+
+def _fmpy_headers() -> Path:
+    import fmpy
+
+    return Path(fmpy.__file__).parent / "c-code"
+
+
+def source_files(kind: FmuKind, fmi_version: int) -> dict[str, bytes]:
+    """``{file name: bytes}`` of every source needed to compile `kind` for `fmi_version` (the FMU's sources/)."""
+    native = resources.files("fmu_src").joinpath("native")
+    files = {name: native.joinpath(name).read_bytes() for name in (*_COMMON, *_FMI_LAYER[fmi_version])}
+    files["config.h"] = native.joinpath(kind.name, "config.h").read_bytes()
+    headers = _fmpy_headers()
+    files.update({name: (headers / name).read_bytes() for name in _FMI_HEADERS[fmi_version]})
+    return dict(sorted(files.items()))
+
+
+def c_sources(fmi_version: int) -> list[str]:
+    """Names of the C files to compile (in the FMU's sources/)."""
+    return [n for n in (*_COMMON, *_FMI_LAYER[fmi_version]) if n.endswith(".c")]
+
+
+def config_problems(kind: FmuKind) -> list[str]:
+    """Differences between the kind's variable table and its config.h (names, types, causalities, order)."""
+    text = resources.files("fmu_src").joinpath("native", kind.name, "config.h").read_text(encoding="utf-8")
+    rows = re.findall(r'\{"(\w+)", VT_(\w+), VC_(\w+), RULE_\w+, "([^"]*)"\}', text)
+    want = [(v.name, v.type.upper(), v.causality.upper(), v.unit) for v in kind.variables]
+    got = [(n, t, c, u) for n, t, c, u in rows]
+    problems = [] if got == want else [f"fmu_src/native/{kind.name}/config.h: variable table {got} differs from "
+                                       f"VARIABLES {want}"]
+    m = re.search(r"#define N_VARIABLES (\d+)", text)
+    if not m or int(m.group(1)) != len(kind.variables):
+        problems.append(f"fmu_src/native/{kind.name}/config.h: N_VARIABLES is not {len(kind.variables)}")
+    m = re.search(r"#define MODEL_IDENTIFIER (\w+)", text)
+    if not m or m.group(1) != kind.model_identifier:
+        problems.append(f"fmu_src/native/{kind.name}/config.h: MODEL_IDENTIFIER is not {kind.model_identifier}")
+    return problems
+
+
+def law_version(kind: FmuKind, fmi_version: int) -> str:
+    """SHA-256 (hex) of the sources of `kind` for `fmi_version`: changes whenever the C code does."""
+    h = hashlib.sha256()
+    for name, data in source_files(kind, fmi_version).items():
+        h.update(name.encode() + b"\0" + hashlib.sha256(data).digest())
+    return h.hexdigest()
+
+
+def _zig_version() -> str:
+    from importlib import metadata
+
+    try:
+        return metadata.version("ziglang")
+    except metadata.PackageNotFoundError:
+        raise ValueError("the native backend needs the ziglang package (pip install ziglang)") from None
+
+
+def compile_binary(kind: FmuKind, fmi_version: int, platform: str) -> bytes:
+    """The shared library of `kind` for one platform, from the cache or compiled with zig (then cached).
+
+    Raises
+    ------
+    ValueError
+        Unknown platform, a config.h that does not match the kind, or a failing compilation.
+    """
+    if platform not in PLATFORMS.get(fmi_version, {}):
+        raise ValueError(f"FMI {fmi_version}: unknown platform {platform!r} "
+                         f"(known: {', '.join(PLATFORMS.get(fmi_version, {}))})")
+    problems = config_problems(kind)
+    if problems:
+        raise ValueError(problems[0])
+    target, ext = PLATFORMS[fmi_version][platform]
+    key = hashlib.sha256(f"{law_version(kind, fmi_version)} {target} {' '.join(_FLAGS)} zig {_zig_version()}"
+                         .encode()).hexdigest()[:32]
+    cached = cache_dir() / "native" / key / f"{kind.model_identifier}{ext}"
+    if cached.is_file():
+        return cached.read_bytes()
+    with tempfile.TemporaryDirectory(prefix="cleatfmu_cc_") as tmp:
+        src = Path(tmp, "src")
+        src.mkdir()
+        for name, data in source_files(kind, fmi_version).items():
+            (src / name).write_bytes(data)
+        out = Path(tmp, "out")
+        out.mkdir()
+        lib = out / f"{kind.model_identifier}{ext}"
+        command = [sys.executable, "-m", "ziglang", "cc", "-target", target, *_FLAGS, "-I", ".", "-o", str(lib),
+                   *c_sources(fmi_version)]
+        if "linux" in target:
+            command.append("-lm")
+        done = subprocess.run(command, cwd=src, capture_output=True, text=True)
+        if done.returncode != 0 or not lib.is_file():
+            raise ValueError(f"compiling {kind.name} for {platform} ({target}) failed: {done.stderr.strip()[-2000:]}")
+        data = lib.read_bytes()
+    cached.parent.mkdir(parents=True, exist_ok=True)
+    fd, part = tempfile.mkstemp(prefix=".part", dir=cached.parent)
+    with os.fdopen(fd, "wb") as f:
+        f.write(data)
+    os.replace(part, cached)
+    return data
+
+
+def compile_binaries(kind: FmuKind, fmi_version: int, platforms) -> dict[str, bytes]:
+    """``{platform: shared library bytes}``, compiled in parallel where not cached."""
+    platforms = list(platforms)
+    with ThreadPoolExecutor(max_workers=max(1, len(platforms))) as pool:
+        libs = list(pool.map(lambda p: compile_binary(kind, fmi_version, p), platforms))
+    return dict(zip(platforms, libs))
