@@ -40,8 +40,9 @@ int cleatfmu_uri_to_path(const char *uri, char *path, size_t path_size, char *ms
         if (p[0] == '/' && p[1] == '/') { /* authority */
             const char *host = p + 2, *end = strchr(host, '/');
             size_t host_len = end ? (size_t)(end - host) : strlen(host);
-            if (host_len == 9 && prefix_nocase(host, "localhost")) host_len = 0;
-            if (host_len > 0) {
+            if (host_len == 9 && prefix_nocase(host, "localhost")) {
+                p = host + 9;
+            } else if (host_len > 0) {
 #ifdef _WIN32
                 if (path_size < 3) goto too_long;
                 path[len++] = '/'; /* UNC: //host/share/... */
@@ -53,7 +54,7 @@ int cleatfmu_uri_to_path(const char *uri, char *path, size_t path_size, char *ms
                 return 1;
 #endif
             } else {
-                p = host + host_len;
+                p = host;
             }
         }
         if (*p != '/' && len == 0) {
@@ -62,14 +63,16 @@ int cleatfmu_uri_to_path(const char *uri, char *path, size_t path_size, char *ms
         }
         for (; *p; p++) {
             int c = (unsigned char)*p;
-            if (c == '%') {
+            if (c == '%') { /* a '%' not followed by two hex digits is kept (importers that do not encode) */
                 int hi = hex_digit((unsigned char)p[1]), lo = hi < 0 ? -1 : hex_digit((unsigned char)p[2]);
-                if (hi < 0 || lo < 0 || (hi == 0 && lo == 0)) {
-                    snprintf(msg, msg_size, "resource location %.200s: invalid percent-encoding", uri);
+                if (hi == 0 && lo == 0) {
+                    snprintf(msg, msg_size, "resource location %.200s: %%00 in the path", uri);
                     return 1;
                 }
-                c = hi * 16 + lo;
-                p += 2;
+                if (hi >= 0 && lo >= 0) {
+                    c = hi * 16 + lo;
+                    p += 2;
+                }
             }
             if (len + 1 >= path_size) goto too_long;
             path[len++] = (char)c;

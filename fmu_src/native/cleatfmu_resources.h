@@ -10,8 +10,8 @@
 
 /* Decode a resource location into a local path without trailing separator:
  * file:///path, file:/path, file://localhost/path (and file://host/share as a
- * UNC path on Windows), percent-encoded UTF-8; a location without scheme is
- * taken as a path.  Returns 0, or 1 with the reason in msg. */
+ * UNC path on Windows), percent-encoded UTF-8 (a '%' without two hex digits
+ * is kept as it is); a location without scheme is taken as a path.  Returns 0, or 1 with the reason in msg. */
 int cleatfmu_uri_to_path(const char *uri, char *path, size_t path_size, char *msg, size_t msg_size);
 
 /* Read <resource location>/cleatfmu_start.txt: the FMU's GUID and the start value of
