@@ -140,7 +140,7 @@ def test_refused_values_are_fmi2Error_with_a_logged_reason_and_the_instance_stay
     try:
         before = s.getReal([refs["stiffness"], refs["force_z"]])
         for name, value, reason in (("stiffness", -1.0, "stiffness must be > 0"), ("hub_z", math.nan, "finite"),
-                                    ("damping", math.inf, "finite"), ("force_z", 1.0, "not a Real input")):
+                                    ("damping", math.inf, "finite"), ("force_z", 1.0, "is not a Real")):
             with pytest.raises(FMICallException) as info:
                 s.setReal([refs[name]], [value])
             assert info.value.status == 3  # fmi2Error, not fmi2Fatal
