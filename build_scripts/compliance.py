@@ -44,7 +44,7 @@ def compliance_problems(fmu) -> list[str]:
     for v in md.modelVariables:
         if not v.description:
             problems.append(f"variable {v.name!r} has no description")
-        if v.type == "Real" and (v.unit is None or v.unit not in units):
+        if v.type in ("Real", "Float64") and (v.unit is None or v.unit not in units):
             problems.append(f"Real variable {v.name!r} has no unit defined in UnitDefinitions")
     inputs = {v for v in md.modelVariables if v.causality == "input"}
     for unknown in md.outputs:

@@ -2,7 +2,8 @@
 
 The C sources live in ``fmu_src/native``: the law (``cleatfmu_law.c``), the
 model (``cleatfmu_model.c``), the resource reader (``cleatfmu_resources.c``)
-and the FMI layer (``fmi2_functions.c``), one ``config.h`` per kind
+the instance (``cleatfmu_instance.c``) and the FMI layers
+(``fmi2_functions.c``, ``fmi3_functions.c``), one ``config.h`` per kind
 (``fmu_src/native/<kind>/config.h``); the FMI headers are the ones fmpy ships
 (``fmpy/c-code``).  :func:`compile_binary` builds one shared library with
 ``python -m ziglang cc -target ...`` and keeps it in the cache
@@ -32,13 +33,19 @@ PLATFORMS = {
     2: {"linux64": ("x86_64-linux-gnu.2.17", ".so"),
         "win64": ("x86_64-windows-gnu", ".dll"),
         "darwin64": ("x86_64-macos", ".dylib")},
+    3: {"x86_64-linux": ("x86_64-linux-gnu.2.17", ".so"),
+        "aarch64-linux": ("aarch64-linux-gnu.2.17", ".so"),
+        "x86_64-windows": ("x86_64-windows-gnu", ".dll"),
+        "x86_64-darwin": ("x86_64-macos", ".dylib"),
+        "aarch64-darwin": ("aarch64-macos", ".dylib")},
 }
 FMI_VERSIONS = tuple(PLATFORMS)
 
 _COMMON = ("cleatfmu_law.h", "cleatfmu_law.c", "cleatfmu_model.h", "cleatfmu_model.c", "cleatfmu_resources.h",
            "cleatfmu_resources.c", "cleatfmu_instance.h", "cleatfmu_instance.c")
-_FMI_LAYER = {2: ("fmi2_functions.c",)}
-_FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")}
+_FMI_LAYER = {2: ("fmi2_functions.c",), 3: ("fmi3_functions.c",)}
+_FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
+                3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
 _FLAGS = ("-shared", "-std=c99", "-O2", "-g0", "-fvisibility=hidden", "-ffp-contract=off", "-fno-fast-math")
 #: Environment variable that overrides the cache folder.
 CACHE_ENV = "CLEATFMU_CACHE_DIR"

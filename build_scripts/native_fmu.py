@@ -22,6 +22,7 @@ import zipfile
 
 from .kinds import FmuKind
 from .model_description import complete_model_description
+from .model_description3 import build_description_fmi3, model_description_fmi3
 from .native import PLATFORMS, c_sources, compile_binaries, source_files
 
 __all__ = ["DEFAULT_STATIC_LOAD_N", "equilibrium_starts", "native_fmu_bytes", "START_FILE"]
@@ -142,7 +143,7 @@ def native_fmu_bytes(kind: FmuKind, starts: dict, *, description: str, version: 
     description, version : str
         Model description and version attributes.
     fmi_version : int
-        2 (FMI 2.0).
+        2 (FMI 2.0) or 3 (FMI 3.0, with ``sources/buildDescription.xml``).
     platforms : iterable of str, optional
         Platform folders (default: all of :data:`build_scripts.native.PLATFORMS`).
     provenance : dict, optional
@@ -173,6 +174,13 @@ def native_fmu_bytes(kind: FmuKind, starts: dict, *, description: str, version: 
         return complete_model_description(_base_model_description(kind, fmi_version, guid), kind,
                                           start_values=starts, description=description, version=version,
                                           generation_tool=generation_tool)
+
+    if fmi_version == 3:
+        files["sources/buildDescription.xml"] = build_description_fmi3(kind, c_sources(fmi_version))
+
+        def model_description(token):  # noqa: F811 - the FMI 3.0 one
+            return model_description_fmi3(kind, starts, description=description, version=version,
+                                          generation_tool=generation_tool, token=token)
 
     guid = _guid({**files, "modelDescription.xml": model_description(_GUID_PLACEHOLDER),
                   START_FILE: _start_file(kind, starts, _GUID_PLACEHOLDER)})

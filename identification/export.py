@@ -170,7 +170,7 @@ def export_fmu(params_path, output_path, *, tire: str | None = None, unloaded_ra
         hub starts at the static equilibrium of the corner mass, when the
         entry has one.
     fmi_version : int
-        FMI version (native backend: 2).
+        FMI version (native backend: 2 or 3).
     platforms : list of str, optional
         Platforms of a native FMU (default: all).
 
@@ -256,9 +256,11 @@ def add_parser(subparsers) -> None:
     p.add_argument("--backend", default="native", metavar="{native,pythonfmu}",
                    help="native: C binaries for Linux, Windows and macOS, no Python needed in the importer "
                         "(default); pythonfmu: the Python slave (needs Python 3 in the importer)")
-    p.add_argument("--fmi-version", type=int, default=2, metavar="{2}", help="FMI version (default 2)")
+    p.add_argument("--fmi-version", type=int, default=2, metavar="{2,3}",
+                   help="FMI version of a native FMU: 2 (FMI 2.0, default) or 3 (FMI 3.0)")
     p.add_argument("--platforms", default=None, metavar="P1,P2",
-                   help="comma-separated platforms of a native FMU (default: all; FMI 2.0: linux64,win64,darwin64)")
+                   help="comma-separated platforms of a native FMU (default: all; FMI 2.0: linux64,win64,darwin64; "
+                        "FMI 3.0: x86_64-linux,aarch64-linux,x86_64-windows,x86_64-darwin,aarch64-darwin)")
     p.set_defaults(func=run)
 
 

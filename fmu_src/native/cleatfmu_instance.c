@@ -106,11 +106,12 @@ int ci_get(CleatfmuInstance *s, const char *function, CleatfmuVarType type, cons
     if (nvr > 0 && (vr == NULL || (type == VT_REAL ? (void *)reals : flags) == NULL))
         return ci_fail(s, "%s: NULL array", function);
     for (i = 0; i < nvr; i++)
-        if (vr[i] >= N_VARIABLES || cleatfmu_variables[vr[i]].type != type)
+        if (!(type == VT_REAL && vr[i] == CI_VR_TIME)
+            && (vr[i] >= N_VARIABLES || cleatfmu_variables[vr[i]].type != type))
             return ci_fail(s, "%s: value reference %u is not a %s variable", function, vr[i], type_name(type));
     if (nvr > 0 && update(s) != CI_OK) return CI_ERROR;
     for (i = 0; i < nvr; i++) {
-        if (type == VT_REAL) reals[i] = s->values[vr[i]];
+        if (type == VT_REAL) reals[i] = vr[i] == CI_VR_TIME ? s->time : s->values[vr[i]];
         else put_flag(flags, i, s->values[vr[i]] != 0.0);
     }
     return CI_OK;

@@ -13,6 +13,9 @@
 #include "cleatfmu_model.h"
 #include "cleatfmu_resources.h"
 
+/* Value reference of the (read-only) independent variable time, after the kind's variables. */
+#define CI_VR_TIME N_VARIABLES
+
 #define CI_OK 0
 #define CI_ERROR 3
 
