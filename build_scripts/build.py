@@ -87,8 +87,56 @@ def _undo_import_side_effects(module_names):
         sys.modules.update(saved_modules)
 
 
+def _is_pythonfmu_module(name: str) -> bool:
+    return name == "pythonfmu" or name.startswith("pythonfmu.")
+
+
+@contextlib.contextmanager
+def _installed_pythonfmu():
+    """The installed pythonfmu package, even after a pythonfmu FMU was loaded in this process.
+
+    A loaded pythonfmu FMU puts its resources folder on ``sys.path``, and that
+    folder holds a copy of pythonfmu without its binaries: a later build would
+    import that copy and write an FMU without ``binaries/``.  Inside this
+    context ``import pythonfmu`` gives the installed package; afterwards the
+    modules and ``sys.path`` are restored, so a loaded FMU keeps its copy.
+    """
+    try:
+        root = Path(str(metadata.distribution("pythonfmu").locate_file("pythonfmu"))).resolve()
+    except metadata.PackageNotFoundError:
+        raise ValueError("the pythonfmu backend needs the pythonfmu package (pip install pythonfmu)") from None
+    current = sys.modules.get("pythonfmu")
+    if current is None or Path(current.__file__).resolve().parent == root:
+        import pythonfmu
+
+        if Path(pythonfmu.__file__).resolve().parent == root:
+            yield pythonfmu
+            return
+    saved_path = list(sys.path)
+    saved = {name: sys.modules.pop(name) for name in [n for n in sys.modules if _is_pythonfmu_module(n)]}
+    sys.path.insert(0, str(root.parent))
+    try:
+        import pythonfmu
+
+        yield pythonfmu
+    finally:
+        for name in [n for n in sys.modules if _is_pythonfmu_module(n)]:
+            sys.modules.pop(name)
+        sys.modules.update(saved)
+        sys.path[:] = saved_path
+
+
 def _run_pythonfmu(kind: FmuKind, stage: Path, out_dir: Path, starts: dict, provenance: dict | None) -> Path:
-    import pythonfmu
+    with _installed_pythonfmu() as pythonfmu:
+        raw = _run_installed_pythonfmu(pythonfmu, kind, stage, out_dir, starts, provenance)
+    with zipfile.ZipFile(raw) as z:
+        if not any(n.startswith("binaries/") and not n.endswith("/") for n in z.namelist()):
+            raise ValueError(f"FMU kind {kind.name}: pythonfmu wrote an FMU without binaries")
+    return raw
+
+
+def _run_installed_pythonfmu(pythonfmu, kind: FmuKind, stage: Path, out_dir: Path, starts: dict,
+                             provenance: dict | None) -> Path:
     from pythonfmu.builder import FmuBuilder
 
     if pythonfmu.__version__ not in VERIFIED_PYTHONFMU:
