@@ -58,3 +58,11 @@ def run_host(host: Path, unzipped: Path, uri: str, fmu_guid: str, *args) -> str:
                           timeout=120)
     assert done.returncode == 0, done.stderr
     return done.stdout
+
+
+@pytest.fixture(scope="session")
+def native_fmus3(tmp_path_factory) -> dict:
+    """``{kind: FMU}``: native FMI 3.0 FMUs of both kinds, every platform, default start values."""
+    out = tmp_path_factory.mktemp("native3")
+    return {kind: build_fmu(kind, out / f"{kind}.fmu", backend="native", fmi_version=3)
+            for kind in ("point_contact", "extended_tire")}
