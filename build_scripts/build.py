@@ -1,7 +1,8 @@
 """Build an FMU of one kind from ``fmu_src`` with given start values.
 
 Steps: stage the slave script, the kind's modules (copied from this project
-under their FMU-unique names) and the start-value file in a temporary folder;
+under names unique to the build, :func:`build_prefix`) and the start-value
+file in a temporary folder;
 let pythonfmu build the FMU there (its import side effects on ``sys.path`` and
 ``sys.modules`` are undone afterwards); complete the modelDescription.xml
 (:mod:`build_scripts.model_description`); write the FMU atomically.
@@ -10,9 +11,11 @@ let pythonfmu build the FMU there (its import side effects on ``sys.path`` and
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import math
 import os
+import re
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
@@ -23,7 +26,7 @@ from pathlib import Path
 from .kinds import FmuKind, load_kind, module_source
 from .model_description import complete_model_description
 
-__all__ = ["BACKENDS", "build_fmu", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
+__all__ = ["BACKENDS", "build_fmu", "build_prefix", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
 
 #: pythonfmu versions whose FMI wrapper the FMU-side workarounds
 #: (``fmu_src/pythonfmu_wrapper.py``) were written and tested for.
@@ -135,6 +138,20 @@ def _run_pythonfmu(kind: FmuKind, stage: Path, out_dir: Path, starts: dict, prov
     return raw
 
 
+def build_prefix(kind: FmuKind, sources: dict[str, bytes]) -> str:
+    """Module-name prefix of one pythonfmu build: ``cleatfmu_<kind>_b<10 hex digits of a content hash>``.
+
+    pythonfmu FMUs whose modules share a name run the code of the one loaded
+    first in a process; naming a build's modules after a hash of its sources
+    and start values makes FMUs that differ load their own modules, and keeps
+    the build reproducible.
+    """
+    h = hashlib.sha256()
+    for name, data in sorted(sources.items()):
+        h.update(name.encode() + b"\0" + hashlib.sha256(data).digest())
+    return f"cleatfmu_{kind.name}_b{h.hexdigest()[:10]}"
+
+
 def _run_installed_pythonfmu(pythonfmu, kind: FmuKind, stage: Path, out_dir: Path, starts: dict,
                              provenance: dict | None) -> Path:
     from pythonfmu.builder import FmuBuilder
@@ -144,27 +161,35 @@ def _run_installed_pythonfmu(pythonfmu, kind: FmuKind, stage: Path, out_dir: Pat
                          f"wrapper are verified for {', '.join(VERIFIED_PYTHONFMU)} only "
                          f"(see fmu_src/pythonfmu_wrapper.py)")
 
-    script = stage / kind.script
-    script.write_bytes(kind.folder.joinpath(kind.script).read_bytes())
+    own = {filename: kind.folder.joinpath(filename).read_bytes() for filename in (kind.script, *kind.files)}
+    copied = {f"{name}.py": module_source(dotted) for name, dotted in sorted(kind.modules.items())}
+    start_json = json.dumps({"start": starts, "provenance": provenance or {}}, indent=2, sort_keys=True).encode()
+    base, prefix = f"cleatfmu_{kind.name}", build_prefix(kind, {**own, **copied, kind.start_file: start_json})
+
+    def renamed(filename: str) -> str:
+        return prefix + filename[len(base):] if filename.startswith(base) else filename
+
+    pattern = re.compile(rb"\b" + re.escape(base.encode()))
+    script = stage / renamed(kind.script)
     project_files = []
-    for filename in kind.files:
-        path = stage / filename
-        path.write_bytes(kind.folder.joinpath(filename).read_bytes())
+    for filename, data in own.items():
+        path = stage / renamed(filename)
+        path.write_bytes(pattern.sub(prefix.encode(), data))  # imports and file names of the kind's modules
+        if filename != kind.script:
+            project_files.append(path)
+    for filename, data in copied.items():
+        path = stage / renamed(filename)
+        path.write_bytes(data)
         project_files.append(path)
-    for name, dotted in sorted(kind.modules.items()):
-        path = stage / f"{name}.py"
-        path.write_bytes(module_source(dotted))
-        project_files.append(path)
-    start_file = stage / kind.start_file
-    start_file.write_text(json.dumps({"start": starts, "provenance": provenance or {}}, indent=2, sort_keys=True),
-                          encoding="utf-8")
+    start_file = stage / renamed(kind.start_file)
+    start_file.write_bytes(start_json)
     project_files.append(start_file)
     docs = None
     if kind.folder.joinpath("README.md").is_file():
         docs = stage / "documentation"
         docs.mkdir()
         (docs / "README.md").write_bytes(kind.folder.joinpath("README.md").read_bytes())
-    with _undo_import_side_effects(kind.module_names()):
+    with _undo_import_side_effects({renamed(f"{name}.py")[:-3] for name in kind.module_names()}):
         try:
             return Path(FmuBuilder.build_FMU(script, dest=out_dir, project_files=project_files,
                                              documentation_folder=docs))

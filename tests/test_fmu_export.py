@@ -78,7 +78,8 @@ def test_export_with_the_pythonfmu_backend(tmp_path):
     assert validate_fmu(str(out)) == []
     s = starts(out)
     assert s["unloaded_radius"] == s["hub_z"] == export.DEFAULT_UNLOADED_RADIUS_M
-    provenance = json.loads(zipfile.ZipFile(out).read("resources/cleatfmu_point_contact_start.json"))["provenance"]
+    entry = zipfile.ZipFile(out).read("resources/slavemodule.txt").decode().strip()
+    provenance = json.loads(zipfile.ZipFile(out).read(f"resources/{entry}_start.json"))["provenance"]
     assert provenance["identified"] == FL and provenance["recording"] == "cleat_7kmh.csv"
 
 

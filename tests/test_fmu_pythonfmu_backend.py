@@ -1,4 +1,4 @@
-"""The pythonfmu backend: a build after a pythonfmu FMU was loaded in the same process."""
+"""The pythonfmu backend: builds after a pythonfmu FMU was loaded, module names unique to each build."""
 
 from __future__ import annotations
 
@@ -7,6 +7,8 @@ import subprocess
 import sys
 import textwrap
 from pathlib import Path
+
+import pytest
 
 import build_scripts
 
@@ -36,3 +38,27 @@ def test_build_after_loading_a_pythonfmu_fmu_in_the_process_still_writes_binarie
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300, env=env)
     assert done.returncode == 0, done.stderr[-3000:]
     assert done.stdout.strip() == "ok"
+
+
+def test_each_build_names_its_modules_after_its_content_and_two_fmus_of_a_kind_run_side_by_side(tmp_path):
+    from fmu_helpers import packaged_modules
+
+    from build_scripts.runners import open_fmpy_slave, variable_refs
+
+    a = build_scripts.build_fmu("point_contact", tmp_path / "a.fmu", start_values={"stiffness": 3e5})
+    b = build_scripts.build_fmu("point_contact", tmp_path / "b.fmu", start_values={"stiffness": 5e5})
+    again = build_scripts.build_fmu("point_contact", tmp_path / "again.fmu", start_values={"stiffness": 3e5})
+    entry_a, entry_b = packaged_modules(a)[0], packaged_modules(b)[0]
+    assert entry_a != entry_b and packaged_modules(again)[0] == entry_a
+    vr = {n: r for n, (r, _) in variable_refs(a).items()}
+    sa, sb = open_fmpy_slave(a, instance_name="a"), open_fmpy_slave(b, instance_name="b")
+    try:
+        for s in (sa, sb):
+            s.setReal([vr["hub_z"], vr["unloaded_radius"]], [0.74, 0.75])
+        assert sa.getReal([vr["force_z"]])[0] == pytest.approx(3e5 * 0.01, rel=1e-12)  # N
+        assert sb.getReal([vr["force_z"]])[0] == pytest.approx(5e5 * 0.01, rel=1e-12)
+        assert entry_a in sys.modules and entry_b in sys.modules  # each FMU runs its own modules
+    finally:
+        for s in (sa, sb):
+            s.terminate()
+            s.freeInstance()
