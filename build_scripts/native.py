@@ -43,7 +43,7 @@ FMI_VERSIONS = tuple(PLATFORMS)
 
 _COMMON = ("cleatfmu_law.h", "cleatfmu_law.c", "cleatfmu_model.h", "cleatfmu_model.c", "cleatfmu_resources.h",
            "cleatfmu_resources.c", "cleatfmu_instance.h", "cleatfmu_instance.c")
-_FMI_LAYER = {2: ("fmi2_functions.c",), 3: ("fmi3_functions.c",)}
+_FMI_LAYER = {2: ("fmi2_functions.c",), 3: ("fmi3_functions.c", "fmi3_unsupported.c")}
 _FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
                 3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
 _FLAGS = ("-shared", "-std=c99", "-O2", "-g0", "-fvisibility=hidden", "-ffp-contract=off", "-fno-fast-math")
