@@ -236,3 +236,32 @@ def test_c_host_step_response_matches_the_python_law_and_the_damped_oscillator(c
     zeta = c / (2.0 * math.sqrt(k * mass))
     overshoot = (rows[:, 1].max() - z0 - height) / height
     assert overshoot == pytest.approx(math.exp(-zeta * math.pi / math.sqrt(1 - zeta ** 2)), rel=0.03)
+
+
+def test_binaries_are_cached_per_platform_and_law_version(native_fmus, tmp_path, monkeypatch):
+    import subprocess
+    import time
+
+    from build_scripts import native
+
+    # Warm cache (the session's FMUs): an export compiles nothing and takes under a second.
+    def no_compiler(*args, **kwargs):
+        raise AssertionError("compiled although the binaries are cached")
+
+    real_run = subprocess.run
+    monkeypatch.setattr(native.subprocess, "run", no_compiler)
+    start = time.perf_counter()
+    fmu = build_fmu("point_contact", tmp_path / "warm.fmu", backend="native")
+    assert time.perf_counter() - start <= 1.0
+    assert fmu.read_bytes() == native_fmus["point_contact"].read_bytes()
+    # An empty cache folder (CLEATFMU_CACHE_DIR) makes the build compile, into that folder.
+    monkeypatch.setattr(native.subprocess, "run", real_run)
+    monkeypatch.setenv("CLEATFMU_CACHE_DIR", str(tmp_path / "cache"))
+    build_fmu("point_contact", tmp_path / "cold.fmu", backend="native", platforms=["linux64"])
+    cached = list((tmp_path / "cache").rglob("CleatfmuPointContact.so"))
+    assert len(cached) == 1
+    with zipfile.ZipFile(tmp_path / "cold.fmu") as z:
+        assert z.read("binaries/linux64/CleatfmuPointContact.so") == cached[0].read_bytes()
+    # The key is the law version: another source gives another folder.
+    kind = load_kind("point_contact")
+    assert native.law_version(kind, 2) != native.law_version(kind, 3)
