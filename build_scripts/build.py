@@ -5,7 +5,13 @@ under names unique to the build, :func:`build_prefix`) and the start-value
 file in a temporary folder;
 let pythonfmu build the FMU there (its import side effects on ``sys.path`` and
 ``sys.modules`` are undone afterwards); complete the modelDescription.xml
-(:mod:`build_scripts.model_description`); write the FMU atomically.
+(:mod:`build_scripts.model_description`) with a GUID derived from the content
+instead of pythonfmu's time-based one, and without its time stamp; write the
+FMU atomically and reproducibly (:mod:`build_scripts.reproducible`).
+
+The native backend (:func:`_build_native`) compiles the C implementation of
+``fmu_src/native`` (:mod:`build_scripts.native`) and packages it
+(:mod:`build_scripts.native_fmu`).
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ from pathlib import Path
 
 from .kinds import FmuKind, load_kind, module_source
 from .model_description import complete_model_description
+from .reproducible import GUID_PLACEHOLDER, content_guid, zip_bytes
 
 __all__ = ["BACKENDS", "build_fmu", "build_prefix", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
 
@@ -263,12 +270,13 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
             stage.mkdir()
             out_dir.mkdir()
             raw = _run_pythonfmu(k, stage, out_dir, starts, provenance)
-            with zipfile.ZipFile(raw) as zin, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:
-                for info in zin.infolist():
-                    data = zin.read(info)
-                    if info.filename == "modelDescription.xml":
-                        data = _finish_xml(data, k, starts, description)
-                    zout.writestr(info.filename, data)
+            with zipfile.ZipFile(raw) as zin:
+                files = {info.filename: zin.read(info) for info in zin.infolist() if not info.is_dir()}
+            xml = files["modelDescription.xml"]
+            guid = content_guid({**files, "modelDescription.xml": _finish_xml(xml, k, starts, description,
+                                                                              GUID_PLACEHOLDER)})
+            files["modelDescription.xml"] = _finish_xml(xml, k, starts, description, guid)
+            tmp.write_bytes(zip_bytes(files))
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
@@ -309,8 +317,12 @@ def _build_native(k, dest: Path, starts, given, provenance, description, fmi_ver
     return dest
 
 
-def _finish_xml(xml: bytes, kind: FmuKind, starts: dict, description: str | None) -> bytes:
+def _finish_xml(xml: bytes, kind: FmuKind, starts: dict, description: str | None, guid: str) -> bytes:
+    """The completed model description with `guid` and without pythonfmu's time stamp (reproducible)."""
     written = ET.fromstring(xml)
+    written.set("guid", guid)
+    written.attrib.pop("generationDateAndTime", None)
+    xml = ET.tostring(written, encoding="UTF-8", xml_declaration=True)
     version = project_version()
     return complete_model_description(
         xml, kind, start_values=starts,

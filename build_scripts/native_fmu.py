@@ -11,27 +11,22 @@ law version serves every FMU of a kind.
 
 from __future__ import annotations
 
-import hashlib
-import io
 import json
 import math
 import struct
-import uuid
 import xml.etree.ElementTree as ET
-import zipfile
 
 from .kinds import FmuKind
 from .model_description import complete_model_description
 from .model_description3 import build_description_fmi3, model_description_fmi3
 from .native import PLATFORMS, c_sources, compile_binaries, source_files
+from .reproducible import GUID_PLACEHOLDER, content_guid, zip_bytes
 
 __all__ = ["DEFAULT_STATIC_LOAD_N", "equilibrium_starts", "native_fmu_bytes", "START_FILE"]
 
 #: Wheel load at which the hub starts when neither the start values nor static_load give one, N.
 DEFAULT_STATIC_LOAD_N = 15000.0
 START_FILE = "resources/cleatfmu_start.txt"
-_ZIP_DATE = (1980, 1, 1, 0, 0, 0)
-_GUID_PLACEHOLDER = "{00000000-0000-0000-0000-000000000000}"
 _HUB_Z_DESCRIPTION = ("Hub (wheel centre) height, absolute, m (z upwards); starts at the static equilibrium under "
                       "the static wheel load, so that the default experiment shows force_z = that load")
 
@@ -114,13 +109,6 @@ def _base_model_description(kind: FmuKind, fmi_version: int, guid: str) -> bytes
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def _guid(parts: dict) -> str:
-    h = hashlib.sha256()
-    for name, data in sorted(parts.items()):
-        h.update(name.encode() + b"\0" + hashlib.sha256(data).digest())
-    return "{" + str(uuid.UUID(bytes=h.digest()[:16], version=5)) + "}"
-
-
 def _kind_for_native(kind: FmuKind) -> FmuKind:
     """The kind with the native hub_z description (its start is the static equilibrium)."""
     import dataclasses
@@ -182,16 +170,8 @@ def native_fmu_bytes(kind: FmuKind, starts: dict, *, description: str, version: 
             return model_description_fmi3(kind, starts, description=description, version=version,
                                           generation_tool=generation_tool, token=token)
 
-    guid = _guid({**files, "modelDescription.xml": model_description(_GUID_PLACEHOLDER),
-                  START_FILE: _start_file(kind, starts, _GUID_PLACEHOLDER)})
+    guid = content_guid({**files, "modelDescription.xml": model_description(GUID_PLACEHOLDER),
+                         START_FILE: _start_file(kind, starts, GUID_PLACEHOLDER)})
     files["modelDescription.xml"] = model_description(guid)
     files[START_FILE] = _start_file(kind, starts, guid)
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w") as z:
-        for name in sorted(files):
-            info = zipfile.ZipInfo(name, date_time=_ZIP_DATE)
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.create_system = 3
-            info.external_attr = 0o100644 << 16
-            z.writestr(info, files[name], compresslevel=9)
-    return buf.getvalue()
+    return zip_bytes(files)

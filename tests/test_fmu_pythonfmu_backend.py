@@ -62,3 +62,20 @@ def test_each_build_names_its_modules_after_its_content_and_two_fmus_of_a_kind_r
         for s in (sa, sb):
             s.terminate()
             s.freeInstance()
+
+
+def test_pythonfmu_builds_are_byte_identical_with_a_content_guid_and_mode_0644(tmp_path):
+    import uuid
+    import zipfile
+
+    from fmpy import read_model_description
+
+    a = build_scripts.build_fmu("extended_tire", tmp_path / "a.fmu", start_values={"damping": 1500.0})
+    b = build_scripts.build_fmu("extended_tire", tmp_path / "b.fmu", start_values={"damping": 1500.0})
+    assert a.read_bytes() == b.read_bytes()
+    guid = uuid.UUID(read_model_description(str(a)).guid)
+    assert guid.version == 5  # from the content, not uuid1 (time and MAC address)
+    root = zipfile.ZipFile(a).read("modelDescription.xml")
+    assert b"generationDateAndTime" not in root
+    assert all((i.external_attr >> 16) & 0o777 == 0o644 and i.date_time == (1980, 1, 1, 0, 0, 0)
+               for i in zipfile.ZipFile(a).infolist())
