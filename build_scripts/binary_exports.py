@@ -11,14 +11,27 @@ import re
 import struct
 from pathlib import Path
 
-__all__ = ["pe_exports", "macho_exports", "exported_names", "fmi_function_names"]
+__all__ = ["pe_exports", "pe_sections", "pe_offset", "macho_exports", "exported_names", "fmi_function_names"]
 
 
-def _pe_offset(sections, rva: int) -> int:
+def pe_offset(sections, rva: int) -> int:
+    """File offset of a relative virtual address, given :func:`pe_sections`."""
     for va, size, raw in sections:
         if va <= rva < va + size:
             return raw + rva - va
     raise ValueError(f"RVA {rva:#x} is in no section")
+
+
+def pe_sections(data: bytes) -> list[tuple[int, int, int]]:
+    """``[(virtual address, size, file offset)]`` of the sections of a PE image."""
+    pe = struct.unpack_from("<I", data, 0x3C)[0]
+    n_sections, opt_size = struct.unpack_from("<H", data, pe + 6)[0], struct.unpack_from("<H", data, pe + 20)[0]
+    sections = []
+    for i in range(n_sections):
+        s = pe + 24 + opt_size + 40 * i
+        vsize, va, raw_size, raw = struct.unpack_from("<IIII", data, s + 8)
+        sections.append((va, max(vsize, raw_size), raw))
+    return sections
 
 
 def pe_exports(data: bytes) -> set[str]:
@@ -34,24 +47,19 @@ def pe_exports(data: bytes) -> set[str]:
     pe = struct.unpack_from("<I", data, 0x3C)[0]
     if data[pe:pe + 4] != b"PE\0\0":
         raise ValueError("not a PE image (no PE signature)")
-    n_sections, opt_size = struct.unpack_from("<H", data, pe + 6)[0], struct.unpack_from("<H", data, pe + 20)[0]
     opt = pe + 24
     magic = struct.unpack_from("<H", data, opt)[0]
     directories = opt + {0x10B: 96, 0x20B: 112}[magic]
     export_rva, export_size = struct.unpack_from("<II", data, directories)
     if export_size == 0:
         raise ValueError("the PE image has no export directory")
-    sections = []
-    for i in range(n_sections):
-        s = opt + opt_size + 40 * i
-        vsize, va, raw_size, raw = struct.unpack_from("<IIII", data, s + 8)
-        sections.append((va, max(vsize, raw_size), raw))
-    d = _pe_offset(sections, export_rva)
+    sections = pe_sections(data)
+    d = pe_offset(sections, export_rva)
     n_names, names_rva = struct.unpack_from("<I", data, d + 24)[0], struct.unpack_from("<I", data, d + 32)[0]
     names = set()
-    table = _pe_offset(sections, names_rva)
+    table = pe_offset(sections, names_rva)
     for i in range(n_names):
-        at = _pe_offset(sections, struct.unpack_from("<I", data, table + 4 * i)[0])
+        at = pe_offset(sections, struct.unpack_from("<I", data, table + 4 * i)[0])
         names.add(data[at:data.index(b"\0", at)].decode("ascii"))
     return names
 

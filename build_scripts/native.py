@@ -8,7 +8,9 @@ the instance (``cleatfmu_instance.c``) and the FMI layers
 (``fmpy/c-code``).  :func:`compile_binary` builds one shared library with
 ``python -m ziglang cc -target ...`` and keeps it in the cache
 (:func:`cache_dir`) under the SHA-256 of the sources, the target and the
-flags, so an export after the first one compiles nothing.
+flags, so an export after the first one compiles nothing.  The binaries are
+reproducible: the same sources give the same bytes (no time stamp in a PE
+image, no build path in a Mach-O install name).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from __future__ import annotations
 import hashlib
 import os
 import re
+import struct
 import subprocess
 import sys
 import tempfile
@@ -47,6 +50,8 @@ _FMI_LAYER = {2: ("fmi2_functions.c",), 3: ("fmi3_functions.c", "fmi3_unsupporte
 _FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
                 3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
 _FLAGS = ("-shared", "-std=c99", "-O2", "-g0", "-fvisibility=hidden", "-ffp-contract=off", "-fno-fast-math")
+#: Version of the compile-and-link recipe beyond the flags (install name, PE post-processing); part of the cache key.
+_RECIPE = "2"
 #: Environment variable that overrides the cache folder.
 CACHE_ENV = "CLEATFMU_CACHE_DIR"
 
@@ -114,6 +119,36 @@ def _zig_version() -> str:
         raise ValueError("the native backend needs the ziglang package (pip install ziglang)") from None
 
 
+def _pe_without_time_stamps(data: bytes) -> bytes:
+    """A PE image with its COFF, export-directory and debug-directory time stamps and PDB signature zeroed.
+
+    lld writes the link time and a random PDB signature there, so two
+    compilations of the same sources would differ; the loader uses neither.
+    """
+    from .binary_exports import pe_sections, pe_offset
+
+    out = bytearray(data)
+    pe = struct.unpack_from("<I", out, 0x3C)[0]
+    struct.pack_into("<I", out, pe + 8, 0)
+    opt = pe + 24
+    directories = opt + {0x10B: 96, 0x20B: 112}[struct.unpack_from("<H", out, opt)[0]]
+    sections = pe_sections(bytes(out))
+    export_rva, export_size = struct.unpack_from("<II", out, directories)
+    if export_size:
+        struct.pack_into("<I", out, pe_offset(sections, export_rva) + 4, 0)
+    debug_rva, debug_size = struct.unpack_from("<II", out, directories + 6 * 8)
+    if debug_size:
+        at = pe_offset(sections, debug_rva)
+        for i in range(debug_size // 28):
+            entry = at + 28 * i
+            struct.pack_into("<I", out, entry + 4, 0)
+            kind, size = struct.unpack_from("<II", out, entry + 12)
+            raw = struct.unpack_from("<I", out, entry + 24)[0]  # PointerToRawData
+            if kind == 2 and size >= 20 and out[raw:raw + 4] == b"RSDS":  # CodeView: a random PDB signature
+                out[raw + 4:raw + 20] = bytes(16)
+    return bytes(out)
+
+
 def compile_binary(kind: FmuKind, fmi_version: int, platform: str) -> bytes:
     """The shared library of `kind` for one platform, from the cache or compiled with zig (then cached).
 
@@ -129,8 +164,8 @@ def compile_binary(kind: FmuKind, fmi_version: int, platform: str) -> bytes:
     if problems:
         raise ValueError(problems[0])
     target, ext = PLATFORMS[fmi_version][platform]
-    key = hashlib.sha256(f"{law_version(kind, fmi_version)} {target} {' '.join(_FLAGS)} zig {_zig_version()}"
-                         .encode()).hexdigest()[:32]
+    key = hashlib.sha256(f"{law_version(kind, fmi_version)} {target} {' '.join(_FLAGS)} zig {_zig_version()} "
+                         f"recipe {_RECIPE}".encode()).hexdigest()[:32]
     cached = cache_dir() / "native" / key / f"{kind.model_identifier}{ext}"
     if cached.is_file():
         return cached.read_bytes()
@@ -146,10 +181,14 @@ def compile_binary(kind: FmuKind, fmi_version: int, platform: str) -> bytes:
                    *c_sources(fmi_version)]
         if "linux" in target:
             command.append("-lm")
+        if "macos" in target:  # else the install name is the absolute path of the temporary output
+            command.append(f"-Wl,-install_name,@rpath/{lib.name}")
         done = subprocess.run(command, cwd=src, capture_output=True, text=True)
         if done.returncode != 0 or not lib.is_file():
             raise ValueError(f"compiling {kind.name} for {platform} ({target}) failed: {done.stderr.strip()[-2000:]}")
         data = lib.read_bytes()
+        if ext == ".dll":
+            data = _pe_without_time_stamps(data)
     cached.parent.mkdir(parents=True, exist_ok=True)
     fd, part = tempfile.mkstemp(prefix=".part", dir=cached.parent)
     with os.fdopen(fd, "wb") as f:

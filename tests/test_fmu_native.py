@@ -175,8 +175,21 @@ def test_byte_identical_re_export_with_content_guid_fixed_dates_mode_0644_and_no
         blob = b"".join(z.read(i) for i in infos)
     assert [i.filename for i in infos] == sorted(i.filename for i in infos)
     assert all(i.date_time == (1980, 1, 1, 0, 0, 0) and (i.external_attr >> 16) & 0o777 == 0o644 for i in infos)
-    for secret in {str(tmp_path), os.path.expanduser("~"), os.getcwd(), socket.gethostname()} - {"/", ""}:
+    for secret in {str(tmp_path), os.path.expanduser("~"), os.getcwd(), socket.gethostname(), "cleatfmu_cc_"} - {
+            "/", ""}:
         assert secret.encode() not in blob, secret
+
+
+def test_two_compilations_give_byte_identical_binaries(tmp_path, monkeypatch):
+    from build_scripts import native
+    from build_scripts.native_fmu import _kind_for_native
+
+    kind = _kind_for_native(load_kind("point_contact"))
+    builds = []
+    for run in ("first", "second"):
+        monkeypatch.setenv("CLEATFMU_CACHE_DIR", str(tmp_path / run))  # empty: compile again
+        builds.append(native.compile_binaries(kind, 2, ["linux64", "win64", "darwin64"]))
+    assert builds[0] == builds[1]  # no link time, PDB signature or build path inside
 
 
 def test_windows_and_macos_binaries_export_every_fmi2_function(native_fmus):
