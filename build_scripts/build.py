@@ -1,18 +1,27 @@
 """Build an FMU of one kind from ``fmu_src`` with given start values.
 
 Steps: stage the slave script, the kind's modules (copied from this project
-under their FMU-unique names) and the start-value file in a temporary folder;
+under names unique to the build, :func:`build_prefix`) and the start-value
+file in a temporary folder;
 let pythonfmu build the FMU there (its import side effects on ``sys.path`` and
 ``sys.modules`` are undone afterwards); complete the modelDescription.xml
-(:mod:`build_scripts.model_description`); write the FMU atomically.
+(:mod:`build_scripts.model_description`) with a GUID derived from the content
+instead of pythonfmu's time-based one, and without its time stamp; write the
+FMU atomically and reproducibly (:mod:`build_scripts.reproducible`).
+
+The native backend (:func:`_build_native`) compiles the C implementation of
+``fmu_src/native`` (:mod:`build_scripts.native`) and packages it
+(:mod:`build_scripts.native_fmu`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import math
 import os
+import re
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
@@ -22,8 +31,9 @@ from pathlib import Path
 
 from .kinds import FmuKind, load_kind, module_source
 from .model_description import complete_model_description
+from .reproducible import GUID_PLACEHOLDER, content_guid, zip_bytes
 
-__all__ = ["build_fmu", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
+__all__ = ["BACKENDS", "build_fmu", "build_prefix", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
 
 #: pythonfmu versions whose FMI wrapper the FMU-side workarounds
 #: (``fmu_src/pythonfmu_wrapper.py``) were written and tested for.
@@ -87,8 +97,70 @@ def _undo_import_side_effects(module_names):
         sys.modules.update(saved_modules)
 
 
+def _is_pythonfmu_module(name: str) -> bool:
+    return name == "pythonfmu" or name.startswith("pythonfmu.")
+
+
+@contextlib.contextmanager
+def _installed_pythonfmu():
+    """The installed pythonfmu package, even after a pythonfmu FMU was loaded in this process.
+
+    A loaded pythonfmu FMU puts its resources folder on ``sys.path``, and that
+    folder holds a copy of pythonfmu without its binaries: a later build would
+    import that copy and write an FMU without ``binaries/``.  Inside this
+    context ``import pythonfmu`` gives the installed package; afterwards the
+    modules and ``sys.path`` are restored, so a loaded FMU keeps its copy.
+    """
+    try:
+        root = Path(str(metadata.distribution("pythonfmu").locate_file("pythonfmu"))).resolve()
+    except metadata.PackageNotFoundError:
+        raise ValueError("the pythonfmu backend needs the pythonfmu package (pip install pythonfmu)") from None
+    current = sys.modules.get("pythonfmu")
+    if current is None or Path(current.__file__).resolve().parent == root:
+        import pythonfmu
+
+        if Path(pythonfmu.__file__).resolve().parent == root:
+            yield pythonfmu
+            return
+    saved_path = list(sys.path)
+    saved = {name: sys.modules.pop(name) for name in [n for n in sys.modules if _is_pythonfmu_module(n)]}
+    sys.path.insert(0, str(root.parent))
+    try:
+        import pythonfmu
+
+        yield pythonfmu
+    finally:
+        for name in [n for n in sys.modules if _is_pythonfmu_module(n)]:
+            sys.modules.pop(name)
+        sys.modules.update(saved)
+        sys.path[:] = saved_path
+
+
 def _run_pythonfmu(kind: FmuKind, stage: Path, out_dir: Path, starts: dict, provenance: dict | None) -> Path:
-    import pythonfmu
+    with _installed_pythonfmu() as pythonfmu:
+        raw = _run_installed_pythonfmu(pythonfmu, kind, stage, out_dir, starts, provenance)
+    with zipfile.ZipFile(raw) as z:
+        if not any(n.startswith("binaries/") and not n.endswith("/") for n in z.namelist()):
+            raise ValueError(f"FMU kind {kind.name}: pythonfmu wrote an FMU without binaries")
+    return raw
+
+
+def build_prefix(kind: FmuKind, sources: dict[str, bytes]) -> str:
+    """Module-name prefix of one pythonfmu build: ``cleatfmu_<kind>_b<10 hex digits of a content hash>``.
+
+    pythonfmu FMUs whose modules share a name run the code of the one loaded
+    first in a process; naming a build's modules after a hash of its sources
+    and start values makes FMUs that differ load their own modules, and keeps
+    the build reproducible.
+    """
+    h = hashlib.sha256()
+    for name, data in sorted(sources.items()):
+        h.update(name.encode() + b"\0" + hashlib.sha256(data).digest())
+    return f"cleatfmu_{kind.name}_b{h.hexdigest()[:10]}"
+
+
+def _run_installed_pythonfmu(pythonfmu, kind: FmuKind, stage: Path, out_dir: Path, starts: dict,
+                             provenance: dict | None) -> Path:
     from pythonfmu.builder import FmuBuilder
 
     if pythonfmu.__version__ not in VERIFIED_PYTHONFMU:
@@ -96,27 +168,35 @@ def _run_pythonfmu(kind: FmuKind, stage: Path, out_dir: Path, starts: dict, prov
                          f"wrapper are verified for {', '.join(VERIFIED_PYTHONFMU)} only "
                          f"(see fmu_src/pythonfmu_wrapper.py)")
 
-    script = stage / kind.script
-    script.write_bytes(kind.folder.joinpath(kind.script).read_bytes())
+    own = {filename: kind.folder.joinpath(filename).read_bytes() for filename in (kind.script, *kind.files)}
+    copied = {f"{name}.py": module_source(dotted) for name, dotted in sorted(kind.modules.items())}
+    start_json = json.dumps({"start": starts, "provenance": provenance or {}}, indent=2, sort_keys=True).encode()
+    base, prefix = f"cleatfmu_{kind.name}", build_prefix(kind, {**own, **copied, kind.start_file: start_json})
+
+    def renamed(filename: str) -> str:
+        return prefix + filename[len(base):] if filename.startswith(base) else filename
+
+    pattern = re.compile(rb"\b" + re.escape(base.encode()))
+    script = stage / renamed(kind.script)
     project_files = []
-    for filename in kind.files:
-        path = stage / filename
-        path.write_bytes(kind.folder.joinpath(filename).read_bytes())
+    for filename, data in own.items():
+        path = stage / renamed(filename)
+        path.write_bytes(pattern.sub(prefix.encode(), data))  # imports and file names of the kind's modules
+        if filename != kind.script:
+            project_files.append(path)
+    for filename, data in copied.items():
+        path = stage / renamed(filename)
+        path.write_bytes(data)
         project_files.append(path)
-    for name, dotted in sorted(kind.modules.items()):
-        path = stage / f"{name}.py"
-        path.write_bytes(module_source(dotted))
-        project_files.append(path)
-    start_file = stage / kind.start_file
-    start_file.write_text(json.dumps({"start": starts, "provenance": provenance or {}}, indent=2, sort_keys=True),
-                          encoding="utf-8")
+    start_file = stage / renamed(kind.start_file)
+    start_file.write_bytes(start_json)
     project_files.append(start_file)
     docs = None
     if kind.folder.joinpath("README.md").is_file():
         docs = stage / "documentation"
         docs.mkdir()
         (docs / "README.md").write_bytes(kind.folder.joinpath("README.md").read_bytes())
-    with _undo_import_side_effects(kind.module_names()):
+    with _undo_import_side_effects({renamed(f"{name}.py")[:-3] for name in kind.module_names()}):
         try:
             return Path(FmuBuilder.build_FMU(script, dest=out_dir, project_files=project_files,
                                              documentation_folder=docs))
@@ -124,8 +204,13 @@ def _run_pythonfmu(kind: FmuKind, stage: Path, out_dir: Path, starts: dict, prov
             raise ValueError(f"FMU kind {kind.name}: {exc}") from None
 
 
+#: Backends of :func:`build_fmu`.
+BACKENDS = ("pythonfmu", "native")
+
+
 def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: dict | None = None,
-              description: str | None = None) -> Path:
+              description: str | None = None, backend: str = "pythonfmu", fmi_version: int = 2,
+              platforms=None) -> Path:
     """Build an FMU of `kind` whose inputs and parameters start at `start_values`.
 
     Parameters
@@ -143,6 +228,16 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
         FMU's start-value file.
     description : str, optional
         Model description (default: the slave class's own).
+    backend : {"pythonfmu", "native"}
+        ``"pythonfmu"``: the Python slave of ``fmu_src/<kind>`` (needs Python
+        on the importing machine); ``"native"``: the C implementation of
+        ``fmu_src/native`` (no Python needed; its hub starts at the static
+        equilibrium unless ``hub_z`` is given, see
+        :func:`build_scripts.native_fmu.equilibrium_starts`).
+    fmi_version : int
+        FMI version of a native FMU (2).
+    platforms : iterable of str, optional
+        Platforms of a native FMU (default: all, see :data:`build_scripts.native.PLATFORMS`).
 
     Returns
     -------
@@ -160,8 +255,12 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
         raise ValueError(f"{dest}: an FMU file name must end with .fmu")
     if not dest.parent.is_dir():
         raise ValueError(f"{dest.parent}: no such directory")
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r} (known: {', '.join(BACKENDS)})")
     k = load_kind(kind)
     starts = resolve_start_values(k, start_values)
+    if backend == "native":
+        return _build_native(k, dest, starts, start_values or {}, provenance, description, fmi_version, platforms)
     fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=".fmu.part", dir=dest.parent)
     os.close(fd)
     tmp = Path(tmp_name)
@@ -171,12 +270,13 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
             stage.mkdir()
             out_dir.mkdir()
             raw = _run_pythonfmu(k, stage, out_dir, starts, provenance)
-            with zipfile.ZipFile(raw) as zin, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:
-                for info in zin.infolist():
-                    data = zin.read(info)
-                    if info.filename == "modelDescription.xml":
-                        data = _finish_xml(data, k, starts, description)
-                    zout.writestr(info.filename, data)
+            with zipfile.ZipFile(raw) as zin:
+                files = {info.filename: zin.read(info) for info in zin.infolist() if not info.is_dir()}
+            xml = files["modelDescription.xml"]
+            guid = content_guid({**files, "modelDescription.xml": _finish_xml(xml, k, starts, description,
+                                                                              GUID_PLACEHOLDER)})
+            files["modelDescription.xml"] = _finish_xml(xml, k, starts, description, guid)
+            tmp.write_bytes(zip_bytes(files))
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
@@ -187,8 +287,42 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
     return dest
 
 
-def _finish_xml(xml: bytes, kind: FmuKind, starts: dict, description: str | None) -> bytes:
+def _build_native(k, dest: Path, starts, given, provenance, description, fmi_version, platforms) -> Path:
+    from identification.tire_law import extended_parameter_problem, parameter_problem
+
+    from .native_fmu import equilibrium_starts, native_fmu_bytes
+
+    law = {n: starts[n] for n in k.names("parameter")}
+    problem = (extended_parameter_problem(law) if "static_load" in law
+               else parameter_problem(law["stiffness"], law["damping"], law["unloaded_radius"]))
+    if problem is not None:
+        raise ValueError(f"FMU kind {k.name}: invalid start values: {problem}")
+    starts = equilibrium_starts(k, starts, given)
+    if description is None:
+        description = k.native.get("description") or f"cleatfmu {k.name} tire (native C), SI units"
+    data = native_fmu_bytes(k, starts, description=description, version=project_version(), fmi_version=fmi_version,
+                            platforms=platforms, provenance=provenance)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=".fmu.part", dir=dest.parent)
+    tmp = Path(tmp_name)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, dest)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return dest
+
+
+def _finish_xml(xml: bytes, kind: FmuKind, starts: dict, description: str | None, guid: str) -> bytes:
+    """The completed model description with `guid` and without pythonfmu's time stamp (reproducible)."""
     written = ET.fromstring(xml)
+    written.set("guid", guid)
+    written.attrib.pop("generationDateAndTime", None)
+    xml = ET.tostring(written, encoding="UTF-8", xml_declaration=True)
     version = project_version()
     return complete_model_description(
         xml, kind, start_values=starts,

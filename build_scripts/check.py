@@ -1,6 +1,6 @@
 """``python -m build_scripts.check``: build and check every FMU kind in ``fmu_src``.
 
-For each kind:
+For each kind and variant (pythonfmu FMI 2.0, native C FMI 2.0 and 3.0):
 
 1. build the FMU (:func:`build_scripts.build_fmu`) with the kind's default
    start values;
@@ -15,9 +15,13 @@ For each kind:
    in the output's SI unit, from ``kind.json``; booleans exactly);
 4. run the same inputs in libcosimpy (Open Simulation Platform) and compare
    with fmpy: the bare fmpy FMU2Slave loop must agree bit for bit, and both
-   with the reference within its tolerance;
+   with the reference within its tolerance (FMI 3.0: the bare FMU3Slave loop
+   with the reference; libcosimpy runs FMI 2.0 only);
 5. if the kind declares FMU-state support: get/set and serialize/deserialize
    round trips must reproduce the outputs bit for bit.
+
+For the native backend, the default experiment (no inputs) must also show
+the static equilibrium: force_z = the default static wheel load throughout.
 
 Across kinds, module names and model identifiers must be unique.  Exit status
 0 if everything passes, 1 otherwise (problems on stderr).
@@ -33,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .build import build_fmu, resolve_start_values
+from .build import BACKENDS, build_fmu, resolve_start_values
 from .compliance import compliance_problems
 from .kinds import kind_names, load_kind, module_name_conflicts
 from .reference import read_reference
@@ -111,18 +115,24 @@ def state_round_trip_problems(fmu, signals: dict, outputs, start_values: dict | 
     return problems
 
 
-def check_kind(kind: str, workdir: Path, log=print) -> list[str]:
-    """All checks of one kind (FMU built in `workdir`); returns the problems found."""
+#: (backend, FMI version) of every FMU the check builds per kind.
+VARIANTS = (("pythonfmu", 2), ("native", 2), ("native", 3))
+
+
+def check_kind(kind: str, workdir: Path, log=print, backend: str = "pythonfmu", fmi_version: int = 2) -> list[str]:
+    """All checks of one kind, backend and FMI version (FMU built in `workdir`); returns the problems found."""
     k = load_kind(kind)
     t0 = time.perf_counter()
-    fmu = build_fmu(kind, workdir / f"{kind}.fmu")
+    fmu = build_fmu(kind, workdir / f"{kind}_{backend}_fmi{fmi_version}.fmu", backend=backend,
+                    fmi_version=fmi_version)
+    kind = f"{kind} ({backend}, FMI {fmi_version})"
     log(f"{kind}: built {fmu.name} ({time.perf_counter() - t0:.1f} s)")
     problems = [f"compliance: {p}" for p in compliance_problems(fmu)]
     if problems:
         return problems
     log(f"{kind}: validate_fmu == [] and compliance checks pass")
 
-    ref = read_reference(kind)
+    ref = read_reference(k.name)
     outputs = k.names("output")
     inputs = k.names("input")
     missing = [n for n in ["time", *inputs, *outputs] if n not in ref]
@@ -143,6 +153,8 @@ def check_kind(kind: str, workdir: Path, log=print) -> list[str]:
                         k.reference_rtol, k.reference_atol)
     log(f"{kind}: default experiment simulated with fmpy ({t.size} samples) and compared with the reference")
 
+    if fmi_version == 3:
+        return problems + _fmi3_problems(kind, fmu, signals, outputs, starts, ref, k, log)
     loop = run_fmpy_loop(fmu, signals, outputs, start_values=starts)
     cosim = run_libcosim(fmu, signals, outputs, start_values=starts)
     problems += compare("libcosimpy vs fmpy loop", cosim, loop, outputs, 0.0, 0.0)
@@ -158,10 +170,54 @@ def check_kind(kind: str, workdir: Path, log=print) -> list[str]:
     return problems
 
 
+def _fmi3_problems(kind, fmu, signals, outputs, starts, ref, k, log) -> list[str]:
+    """The bare FMU3Slave loop against the reference (one row later) and FMU-state round trips."""
+    from .runners3 import fmi3_state_round_trip_problems, run_fmi3_loop
+
+    loop = run_fmi3_loop(fmu, signals, outputs, start_values=starts)
+    problems = compare("fmpy FMU3Slave loop vs reference", loop, ref, outputs, k.reference_rtol, k.reference_atol,
+                       rows=slice(1, None))
+    log(f"{kind}: bare FMU3Slave loop compared with the reference (libcosimpy runs FMI 2.0 only)")
+    problems += [f"FMU state: {p}" for p in fmi3_state_round_trip_problems(fmu, signals, outputs, starts)]
+    log(f"{kind}: FMU state get/set and serialize/deserialize round trips checked")
+    if not problems:
+        log(f"{kind}: OK")
+    return problems
+
+
+def native_problems(kind: str, workdir: Path, log=print, fmi_version: int = 2) -> list[str]:
+    """Checks of the native FMU beyond the common ones: the default experiment shows the static equilibrium.
+
+    Built with the kind's default start values, simulated without inputs, the
+    FMU must give force_z = the default static wheel load (N) throughout and be
+    in contact (the hub starts at the static equilibrium, off the built-in cleat).
+    """
+    from .native_fmu import DEFAULT_STATIC_LOAD_N
+    from fmpy import simulate_fmu
+
+    fmu = workdir / f"{kind}_native_fmi{fmi_version}.fmu"
+    res = simulate_fmu(str(fmu), output=["force_z", "in_contact"])
+    force = np.asarray(res["force_z"], dtype=float)
+    problems = []
+    if not np.allclose(force, DEFAULT_STATIC_LOAD_N, rtol=1e-9) or not np.all(res["in_contact"]):
+        problems.append(f"default experiment: force_z from {force.min()!r} to {force.max()!r} N, "
+                        f"expected the static load {DEFAULT_STATIC_LOAD_N} N throughout")
+    else:
+        log(f"{kind} (native, FMI {fmi_version}): default experiment shows the static equilibrium "
+            f"({DEFAULT_STATIC_LOAD_N} N)")
+    return problems
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m build_scripts.check", description=__doc__.split("\n\n")[0])
     parser.add_argument("kinds", nargs="*", help="kinds to check (default: all in fmu_src)")
+    parser.add_argument("--backend", choices=BACKENDS, action="append",
+                        help="backend(s) to check (default: all)")
+    parser.add_argument("--fmi-version", type=int, choices=(2, 3), action="append",
+                        help="FMI version(s) to check (default: all the backend builds)")
     args = parser.parse_args(argv)
+    variants = [(b, v) for b, v in VARIANTS if (not args.backend or b in args.backend)
+                and (not args.fmi_version or v in args.fmi_version)]
     kinds = args.kinds or kind_names()
     if not kinds:
         print("check: no FMU kinds found in fmu_src", file=sys.stderr)
@@ -169,10 +225,15 @@ def main(argv=None) -> int:
     failures = [f"module names: {p}" for p in module_name_conflicts([load_kind(k) for k in kind_names()])]
     with tempfile.TemporaryDirectory(prefix="cleatfmu_check_") as tmp:
         for kind in kinds:
-            try:
-                failures += [f"{kind}: {p}" for p in check_kind(kind, Path(tmp))]
-            except Exception as exc:  # a failing kind must not hide the others
-                failures.append(f"{kind}: {type(exc).__name__}: {exc}")
+            for backend, version in variants:
+                label = f"{kind} ({backend}, FMI {version})"
+                try:
+                    failures += [f"{label}: {p}" for p in check_kind(kind, Path(tmp), backend=backend,
+                                                                     fmi_version=version)]
+                    if backend == "native":
+                        failures += [f"{label}: {p}" for p in native_problems(kind, Path(tmp), fmi_version=version)]
+                except Exception as exc:  # a failing kind must not hide the others
+                    failures.append(f"{label}: {type(exc).__name__}: {exc}")
     for problem in failures:
         print(f"check: FAIL {problem}", file=sys.stderr)
     print(f"check: {len(kinds)} FMU kind(s), {'all passed' if not failures else f'{len(failures)} problem(s)'}")

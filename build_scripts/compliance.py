@@ -9,8 +9,8 @@
   stop and step size;
 * every output lists its input dependencies (direct feedthrough exposed);
 * every Python module in the FMU's resources (pythonfmu's own excepted) has a
-  name starting with the FMU's slave module name, and the model identifier
-  names the binaries;
+  name starting with the FMU's slave module name (pythonfmu FMUs), and the
+  model identifier names the binaries;
 * canGetAndSetFMUstate implies canSerializeFMUstate (the pair is declared
   only when both round-trip, which :mod:`build_scripts.check` verifies).
 """
@@ -44,7 +44,7 @@ def compliance_problems(fmu) -> list[str]:
     for v in md.modelVariables:
         if not v.description:
             problems.append(f"variable {v.name!r} has no description")
-        if v.type == "Real" and (v.unit is None or v.unit not in units):
+        if v.type in ("Real", "Float64") and (v.unit is None or v.unit not in units):
             problems.append(f"Real variable {v.name!r} has no unit defined in UnitDefinitions")
     inputs = {v for v in md.modelVariables if v.causality == "input"}
     for unknown in md.outputs:
@@ -57,10 +57,12 @@ def compliance_problems(fmu) -> list[str]:
         problems.append("canGetAndSetFMUstate and canSerializeFMUstate differ")
     with zipfile.ZipFile(fmu) as z:
         names = z.namelist()
-        slave_module = z.read("resources/slavemodule.txt").decode("utf-8").strip()
+        slave_module = (z.read("resources/slavemodule.txt").decode("utf-8").strip()
+                        if "resources/slavemodule.txt" in names else None)
     for name in names:
         path = PurePosixPath(name)
-        if len(path.parts) == 2 and path.parts[0] == "resources" and path.suffix == ".py":
+        if (slave_module is not None and len(path.parts) == 2 and path.parts[0] == "resources"
+                and path.suffix == ".py"):
             if path.stem != slave_module and not path.stem.startswith(slave_module + "_"):
                 problems.append(f"module {path.stem!r} in the FMU does not start with {slave_module!r}")
     binaries = [n for n in names if n.startswith("binaries/") and not n.endswith("/")]

@@ -68,6 +68,7 @@ class FmuKind:
     fmu_state: bool
     start_file: str
     variables: tuple
+    native: dict = None
 
     @property
     def module_name(self) -> str:
@@ -185,7 +186,8 @@ def load_kind(name: str) -> FmuKind:
     return FmuKind(name=name, folder=folder, script=script, files=files, model_identifier=identifier, modules=modules,
                    reference_file=ref_file, reference_rtol=rtol, reference_atol=atol,
                    reference_start_values=ref_starts, fmu_state=fmu_state,
-                   start_file=literals["START_FILE"], variables=tuple(variables))
+                   start_file=literals["START_FILE"], variables=tuple(variables),
+                   native=dict(manifest.get("native", {})))
 
 
 def module_name_conflicts(kinds) -> list[str]:

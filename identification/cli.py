@@ -85,7 +85,7 @@ def cmd_identify(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="cleatfmu", description="Tire stiffness and damping from cleat tests, "
-                                     "exported as FMI 2.0 co-simulation FMUs.")
+                                     "exported as FMI 2.0 and 3.0 co-simulation FMUs.")
     parser.add_argument("--version", action="version", version=f"cleatfmu {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 

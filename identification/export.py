@@ -1,5 +1,10 @@
 """``cleatfmu export``: identified tire parameters -> point-contact tire FMU.
 
+``--backend native`` (the command's default) builds the C implementation
+(binaries for Linux, Windows and macOS, no Python needed in the importer);
+``--backend pythonfmu`` the Python slave.  :func:`export_fmu` defaults to
+``"pythonfmu"`` for its library callers.
+
 ``cleatfmu export PARAMS.json --tire FL -o FL.fmu`` reads the output of
 ``cleatfmu identify --json`` and builds (with :func:`build_scripts.build_fmu`)
 an FMI 2.0 co-simulation FMU of the point-contact tire whose tunable
@@ -21,9 +26,10 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
+from pathlib import Path, PureWindowsPath
 
 from .errors import InputError
+from .recording import STANDARD_GRAVITY
 from .tire_law import value_problem
 
 __all__ = ["DEFAULT_UNLOADED_RADIUS_M", "FMU_KIND", "read_identified", "export_fmu", "add_parser", "run"]
@@ -105,19 +111,33 @@ def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
     return doc, tire, entry
 
 
+def _method(entry: dict) -> str:
+    """Identification method of an ``identify`` entry: the waveform fit carries confidence intervals."""
+    return "waveform" if "k_ci" in entry else "paper"
+
+
+def _recording_name(doc: dict) -> str | None:
+    """The recording's file name (never the directory it was read from on the build machine)."""
+    recording = doc.get("recording")
+    return PureWindowsPath(str(recording)).name if recording else None
+
+
 def _description(doc: dict, tire: str, starts: dict, entry: dict, radius_given: bool) -> str:
     """Model description: provenance, then every parameter as ``name = value unit (meaning)``.
 
     ``fmpy info`` prints the model description but lists only inputs and
     outputs, so the parameters are summarised here, with the units and
-    descriptions of the FMU kind's variable table.
+    descriptions of the FMU kind's variable table.  The provenance names the
+    recording by its file name only, the identification method and the
+    cleatfmu version.
     """
     from build_scripts import load_kind
+    from build_scripts.build import project_version
 
     kind = load_kind(FMU_KIND)
     parts = [f"Point-contact tire {tire} (spring k parallel to damper c, SI units), identified by the cleat test"]
-    if doc.get("recording"):
-        parts.append(f" of recording '{doc['recording']}'")
+    if _recording_name(doc):
+        parts.append(f" of recording '{_recording_name(doc)}'")
     if _number(doc.get("speed_kmh")):
         parts.append(f" at {doc['speed_kmh']:.4g} km/h")
     if _number(entry.get("mass")):
@@ -127,11 +147,12 @@ def _description(doc: dict, tire: str, starts: dict, entry: dict, radius_given: 
         var = kind.variable(name)
         note = "" if name != "unloaded_radius" else ("; given" if radius_given else "; default assumption")
         rows.append(f"{name} = {starts[name]:.6g} {var.unit} ({var.description}{note})")
+    parts.append(f" by the {_method(entry)} method, cleatfmu {project_version()}")
     return "".join(parts) + ". Parameters: " + "; ".join(rows) + "."
 
 
-def export_fmu(params_path, output_path, *, tire: str | None = None,
-               unloaded_radius_m: float | None = None) -> Path:
+def export_fmu(params_path, output_path, *, tire: str | None = None, unloaded_radius_m: float | None = None,
+               backend: str = "pythonfmu", fmi_version: int = 2, platforms=None) -> Path:
     """Build the point-contact tire FMU for one identified tire.
 
     Parameters
@@ -144,6 +165,14 @@ def export_fmu(params_path, output_path, *, tire: str | None = None,
         Tire to export (required when the file holds several).
     unloaded_radius_m : float, optional
         Unloaded radius r0, m (default :data:`DEFAULT_UNLOADED_RADIUS_M`, an assumption).
+    backend : {"pythonfmu", "native"}
+        FMU implementation (see :func:`build_scripts.build_fmu`); a native FMU's
+        hub starts at the static equilibrium of the corner mass, when the
+        entry has one.
+    fmi_version : int
+        FMI version (native backend: 2 or 3).
+    platforms : list of str, optional
+        Platforms of a native FMU (default: all).
 
     Returns
     -------
@@ -170,16 +199,46 @@ def export_fmu(params_path, output_path, *, tire: str | None = None,
         raise InputError(output_path, f"directory {str(output_path.parent)!r} does not exist")
     if output_path.is_dir():
         raise InputError(output_path, "is a directory")
+    _check_backend(backend, fmi_version, platforms)
     provenance = {"command": "cleatfmu export", "params_file": Path(params_path).name, "tire": tire,
-                  "recording": doc.get("recording"), "speed_kmh": doc.get("speed_kmh"), "identified": entry,
+                  "recording": _recording_name(doc), "method": _method(entry), "speed_kmh": doc.get("speed_kmh"),
+                  "identified": entry,
                   "unloaded_radius_m": radius,
                   "unloaded_radius_source": "given" if radius_given else "default assumption"}
     starts = {"stiffness": entry["k"], "damping": entry["c"], "unloaded_radius": radius}
+    description = _description(doc, tire, starts, entry, radius_given)
+    if backend == "native" and _number(entry.get("mass")) and entry["mass"] > 0:
+        starts["hub_z"] = radius - entry["mass"] * STANDARD_GRAVITY / entry["k"]  # static equilibrium, m
     try:
         return build_fmu(FMU_KIND, output_path, start_values=starts, provenance=provenance,
-                         description=_description(doc, tire, starts, entry, radius_given))
+                         description=description, backend=backend, fmi_version=fmi_version, platforms=platforms)
     except OSError as exc:
         raise InputError(output_path, f"cannot write: {exc.strerror or exc}") from None
+
+
+def _check_backend(backend: str, fmi_version: int, platforms) -> None:
+    from build_scripts.build import BACKENDS
+    from build_scripts.native import PLATFORMS
+
+    if backend not in BACKENDS:
+        raise InputError("--backend", f"unknown backend {backend!r} (known: {', '.join(BACKENDS)})")
+    if backend == "pythonfmu":
+        if fmi_version != 2:
+            raise InputError("--fmi-version", "the pythonfmu backend builds FMI 2.0 FMUs only")
+        if platforms is not None:
+            raise InputError("--platforms", "the pythonfmu backend builds for the platforms pythonfmu ships")
+        return
+    if fmi_version not in PLATFORMS:
+        raise InputError("--fmi-version", f"FMI {fmi_version} is not supported "
+                                          f"(supported: {', '.join(map(str, PLATFORMS))})")
+    if platforms is not None:
+        known = PLATFORMS[fmi_version]
+        if not platforms:
+            raise InputError("--platforms", "no platform given")
+        for platform in platforms:
+            if platform not in known:
+                raise InputError("--platforms", f"unknown platform {platform!r} for FMI {fmi_version} "
+                                                f"(known: {', '.join(known)})")
 
 
 def add_parser(subparsers) -> None:
@@ -194,6 +253,14 @@ def add_parser(subparsers) -> None:
     p.add_argument("--unloaded-radius-m", type=float, default=None, metavar="R0",
                    help=f"unloaded tire radius, m (default {DEFAULT_UNLOADED_RADIUS_M}, an assumption; "
                         f"it only sets the hub height at which the tire touches the road)")
+    p.add_argument("--backend", default="native", metavar="{native,pythonfmu}",
+                   help="native: C binaries for Linux, Windows and macOS, no Python needed in the importer "
+                        "(default); pythonfmu: the Python slave (needs Python 3 in the importer)")
+    p.add_argument("--fmi-version", type=int, default=2, metavar="{2,3}",
+                   help="FMI version of a native FMU: 2 (FMI 2.0, default) or 3 (FMI 3.0)")
+    p.add_argument("--platforms", default=None, metavar="P1,P2",
+                   help="comma-separated platforms of a native FMU (default: all; FMI 2.0: linux64,win64,darwin64; "
+                        "FMI 3.0: x86_64-linux,aarch64-linux,x86_64-windows,x86_64-darwin,aarch64-darwin)")
     p.set_defaults(func=run)
 
 
@@ -201,6 +268,9 @@ def run(args) -> int:
     """Run ``cleatfmu export``; returns 0 (user errors raise InputError)."""
     _, tire, entry = read_identified(args.params, args.tire)
     output = Path(args.output) if args.output else Path(f"{tire}.fmu")
-    path = export_fmu(args.params, output, tire=tire, unloaded_radius_m=args.unloaded_radius_m)
+    platforms = None if args.platforms is None else [p.strip() for p in args.platforms.split(",") if p.strip()]
+    _check_backend(args.backend, args.fmi_version, platforms)
+    path = export_fmu(args.params, output, tire=tire, unloaded_radius_m=args.unloaded_radius_m,
+                      backend=args.backend, fmi_version=args.fmi_version, platforms=platforms)
     print(f"wrote {path}: tire {tire}, stiffness {entry['k']:.6g} N/m, damping {entry['c']:.6g} N.s/m")
     return 0

@@ -38,10 +38,11 @@ def starts(fmu) -> dict:
             if sv.find("Real") is not None and sv.find("Real").get("start") is not None}
 
 
-def test_export_writes_an_fmu_starting_at_the_identified_values(tmp_path, capsys):
+def test_export_writes_a_native_fmu_starting_at_the_identified_values_and_the_static_equilibrium(tmp_path, capsys):
     from fmpy.validation import validate_fmu
 
-    params = params_file(tmp_path)
+    doc = {"recording": "/home/someone/data/cleat_7kmh.csv", "speed_kmh": 7.0, "tires": {"FL": FL, "FR": FR}}
+    params = params_file(tmp_path, doc)
     out = tmp_path / "out" / "FL.fmu"
     out.parent.mkdir()
     assert cli.main(["export", str(params), "--tire", "FL", "-o", str(out)]) == 0
@@ -49,13 +50,45 @@ def test_export_writes_an_fmu_starting_at_the_identified_values(tmp_path, capsys
     assert validate_fmu(str(out)) == []
     s = starts(out)
     assert (s["stiffness"], s["damping"]) == (FL["k"], FL["c"])
-    assert s["unloaded_radius"] == s["hub_z"] == export.DEFAULT_UNLOADED_RADIUS_M
-    root = ET.fromstring(zipfile.ZipFile(out).read("modelDescription.xml"))
-    assert "cleat_7kmh.csv" in root.get("description") and "FL" in root.get("description")
-    provenance = json.loads(zipfile.ZipFile(out).read("resources/cleatfmu_point_contact_start.json"))["provenance"]
+    assert s["unloaded_radius"] == export.DEFAULT_UNLOADED_RADIUS_M
+    # The hub starts where the tire carries the corner's weight m g: deflection m g / k.
+    assert s["unloaded_radius"] - s["hub_z"] == pytest.approx(FL["mass"] * 9.80665 / FL["k"], rel=1e-12)
+    with zipfile.ZipFile(out) as z:
+        names = z.namelist()
+        root = ET.fromstring(z.read("modelDescription.xml"))
+        provenance = json.loads(z.read("resources/provenance.json"))
+        assert b"/home/someone" not in b"".join(z.read(n) for n in names)
+    assert {"binaries/linux64/CleatfmuPointContact.so", "binaries/win64/CleatfmuPointContact.dll",
+            "binaries/darwin64/CleatfmuPointContact.dylib"} <= set(names)
+    assert not any(n.endswith(".py") for n in names)
+    description = root.get("description")
+    assert "'cleat_7kmh.csv'" in description and "FL" in description and "paper method" in description
+    assert "cleatfmu 0.1.0" in description or "cleatfmu unknown" in description
     assert provenance["identified"] == FL and provenance["recording"] == "cleat_7kmh.csv"
-    assert provenance["unloaded_radius_source"] == "default assumption"
+    assert provenance["method"] == "paper" and provenance["unloaded_radius_source"] == "default assumption"
     assert sorted(p.name for p in out.parent.iterdir()) == ["FL.fmu"]
+
+
+def test_export_with_the_pythonfmu_backend(tmp_path):
+    from fmpy.validation import validate_fmu
+
+    out = tmp_path / "FL.fmu"
+    assert cli.main(["export", str(params_file(tmp_path)), "--tire", "FL", "-o", str(out),
+                     "--backend", "pythonfmu"]) == 0
+    assert validate_fmu(str(out)) == []
+    s = starts(out)
+    assert s["unloaded_radius"] == s["hub_z"] == export.DEFAULT_UNLOADED_RADIUS_M
+    entry = zipfile.ZipFile(out).read("resources/slavemodule.txt").decode().strip()
+    provenance = json.loads(zipfile.ZipFile(out).read(f"resources/{entry}_start.json"))["provenance"]
+    assert provenance["identified"] == FL and provenance["recording"] == "cleat_7kmh.csv"
+
+
+def test_export_for_chosen_platforms_only(tmp_path):
+    out = tmp_path / "FL.fmu"
+    assert cli.main(["export", str(params_file(tmp_path)), "--tire", "FL", "-o", str(out),
+                     "--platforms", "linux64, win64"]) == 0
+    binaries = sorted(n for n in zipfile.ZipFile(out).namelist() if n.startswith("binaries/"))
+    assert binaries == ["binaries/linux64/CleatfmuPointContact.so", "binaries/win64/CleatfmuPointContact.dll"]
 
 
 def test_exported_fmu_computes_with_the_identified_stiffness(tmp_path):
@@ -120,6 +153,11 @@ def test_bad_params_file_exits_2_with_one_line_naming_the_file(tmp_path, capsys,
     (["--unloaded-radius-m", "nan"], "--unloaded-radius-m", "must be finite"),
     (["-o", "FL.zip"], "FL.zip", "must end with .fmu"),
     (["-o", "missing_dir/FL.fmu"], "missing_dir", "does not exist"),
+    (["--platforms", "linux64,amiga"], "--platforms", "unknown platform 'amiga'"),
+    (["--platforms", ","], "--platforms", "no platform given"),
+    (["--fmi-version", "1"], "--fmi-version", "FMI 1 is not supported"),
+    (["--backend", "java"], "--backend", "unknown backend 'java'"),
+    (["--backend", "pythonfmu", "--platforms", "linux64"], "--platforms", "pythonfmu backend"),
 ])
 def test_bad_options_exit_2_and_write_nothing(tmp_path, monkeypatch, capsys, args, source, fragment):
     monkeypatch.chdir(tmp_path)

@@ -169,12 +169,11 @@ def test_host_survives_repeated_errors_and_frees_cleanly(fmu):
 
 def test_fmu_contains_the_law_and_shared_modules_verbatim_and_only_kind_prefixed_modules(fmu):
     entry, modules = packaged_modules(fmu)
-    assert modules["cleatfmu_extended_tire_law"] == Path(law.__file__).read_bytes()
-    assert modules["cleatfmu_extended_tire_table"] == module_source("fmu_src.table_slave")
-    assert modules["cleatfmu_extended_tire_wrapper"] == module_source("fmu_src.pythonfmu_wrapper")
-    assert entry == "cleatfmu_extended_tire"
-    assert set(modules) == {"cleatfmu_extended_tire", "cleatfmu_extended_tire_slave", "cleatfmu_extended_tire_table",
-                            "cleatfmu_extended_tire_law", "cleatfmu_extended_tire_wrapper"}
+    assert entry.startswith("cleatfmu_extended_tire_b") and len(entry) == len("cleatfmu_extended_tire_b") + 10
+    assert modules[f"{entry}_law"] == Path(law.__file__).read_bytes()
+    assert modules[f"{entry}_table"] == module_source("fmu_src.table_slave")
+    assert modules[f"{entry}_wrapper"] == module_source("fmu_src.pythonfmu_wrapper")
+    assert set(modules) == {entry, f"{entry}_slave", f"{entry}_table", f"{entry}_law", f"{entry}_wrapper"}
 
 
 def test_instantiate_free_cycles_leak_at_most_1_mb_and_keep_sys_path(fmu, tmp_path):

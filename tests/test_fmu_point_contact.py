@@ -11,7 +11,8 @@ import pytest
 from fmu_helpers import (LEAK_LIMIT, assert_fmpy_matches_the_reference, assert_host_survives_errors,
                          assert_instantiate_free_cycles_leak_at_most_1_mb_and_keep_sys_path,
                          assert_libcosim_matches_fmpy, assert_state_round_trip, assert_value_rejected, kind_fixtures,
-                         model_description, reinitialise_and_step, rewrite_fmu, rss_growth, run_steps)
+                         model_description, packaged_modules, reinitialise_and_step, rewrite_fmu, rss_growth,
+                         run_steps)
 
 from build_scripts import build_fmu, load_kind
 from build_scripts.reference import closed_form_outputs, read_reference
@@ -216,7 +217,8 @@ def test_tampered_start_file_fails_instantiation_without_crashing(fmu, tmp_path)
         doc["start"]["stiffness"] = -5.0
         return json.dumps(doc).encode()
 
-    bad = rewrite_fmu(fmu, tmp_path / "bad.fmu", "resources/cleatfmu_point_contact_start.json", negative_stiffness)
+    entry, _ = packaged_modules(fmu)
+    bad = rewrite_fmu(fmu, tmp_path / "bad.fmu", f"resources/{entry}_start.json", negative_stiffness)
     messages = []
     with pytest.raises(Exception, match="instantiate"):
         open_fmpy_slave(bad, logger=lambda status, category, message: messages.append(message))

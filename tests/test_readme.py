@@ -17,9 +17,10 @@ def test_quick_start_has_exactly_two_commands_that_ci_runs():
     assert "for name in main test" in ci and "README.md" in ci
 
 
-def test_fmpy_example_runs(tmp_path, monkeypatch):
+@pytest.mark.parametrize("backend", ["native", "pythonfmu"])
+def test_fmpy_example_runs(tmp_path, monkeypatch, backend):
     from build_scripts import build_fmu
-    build_fmu("point_contact", tmp_path / "FL.fmu",
+    build_fmu("point_contact", tmp_path / "FL.fmu", backend=backend,
               start_values={"stiffness": 500e3, "damping": 4000.0, "unloaded_radius": 0.75})
     section = README[README.index("### Using the FMU in another tool"):]
     code = re.search(r"```python\n(.+?)```", section, re.S).group(1)

@@ -1,0 +1,83 @@
+/* The tire force law (see cleatfmu_law.h and identification/tire_law.py). */
+#include <math.h>
+
+#include "cleatfmu_law.h"
+
+#define CLEATFMU_PI 3.141592653589793 /* == Python's math.pi */
+
+void cleatfmu_point_contact(double hub_z, double hub_vz, double road_z, double road_vz,
+                            double stiffness, double damping, double unloaded_radius,
+                            CleatfmuTireResult *out) {
+    double d = unloaded_radius - (hub_z - road_z);
+    double dd = road_vz - hub_vz;
+    out->force = stiffness * d + damping * dd;
+    out->deflection = d;
+    out->deflection_rate = dd;
+    out->contact = d > 0.0;
+    out->road = road_z;
+}
+
+/* Built-in cleat seen at x: height and slope dr/dx (tire_law.footprint_cleat). */
+static void footprint_cleat(double x, double footprint, double xc, double h, double w,
+                            double *height, double *slope) {
+    double lo, hi, left, right;
+    *height = 0.0;
+    *slope = 0.0;
+    if (h == 0.0) return;
+    if (footprint <= 0.0) {
+        *height = (xc <= x && x < xc + w) ? h : 0.0;
+        return;
+    }
+    lo = x - 0.5 * footprint;
+    hi = x + 0.5 * footprint;
+    left = (xc > lo) ? xc : lo;
+    right = (xc + w < hi) ? xc + w : hi;
+    if (right <= left) return;
+    *slope = (((hi < xc + w) ? 1.0 : 0.0) - ((lo > xc) ? 1.0 : 0.0)) * h / footprint;
+    *height = h * (right - left) / footprint;
+}
+
+/* Road-equivalent lugs A sin(2 pi x / p + phi): height and slope (tire_law.lug_road). */
+static void lug_road(double x, double amplitude, double pitch, double phase, double *height, double *slope) {
+    double k, arg;
+    *height = 0.0;
+    *slope = 0.0;
+    if (amplitude == 0.0) return;
+    k = 2.0 * CLEATFMU_PI / pitch;
+    arg = k * x + phase;
+    *height = amplitude * sin(arg);
+    *slope = amplitude * k * cos(arg);
+}
+
+/* k d, or W sign(d) |d / d_W|^n with d_W = n W / k (tire_law.elastic_force). */
+static double elastic_force(double d, double k, double n, double w) {
+    double ratio;
+    if (n == 1.0) return k * d;
+    ratio = d * k / (n * w);
+    return copysign(w * pow(fabs(ratio), n), ratio);
+}
+
+void cleatfmu_extended_tire(double hub_z, double hub_vz, double hub_x, double hub_vx,
+                            double road_z, double road_vz, const CleatfmuTireParameters *p,
+                            CleatfmuTireResult *out) {
+    double cleat, cleat_slope, lug, lug_slope, road, d, dd, f;
+    int contact;
+    footprint_cleat(hub_x, p->footprint_length, p->cleat_x, p->cleat_height, p->cleat_width, &cleat, &cleat_slope);
+    lug_road(hub_x, p->lug_amplitude, p->lug_pitch, p->lug_phase, &lug, &lug_slope);
+    road = road_z + cleat + lug;
+    d = p->unloaded_radius - (hub_z - road);
+    dd = road_vz + (cleat_slope + lug_slope) * hub_vx - hub_vz;
+    f = elastic_force(d, p->stiffness, p->stiffness_exponent, p->static_load) + p->damping * dd;
+    if (p->friction_force != 0.0) f += p->friction_force * tanh(dd / p->friction_velocity);
+    if (p->unilateral) {
+        contact = d > 0.0 && f > 0.0;
+        if (!contact) f = 0.0;
+    } else {
+        contact = d > 0.0;
+    }
+    out->force = f;
+    out->deflection = d;
+    out->deflection_rate = dd;
+    out->contact = contact;
+    out->road = road;
+}

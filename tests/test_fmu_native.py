@@ -1,0 +1,280 @@
+"""The native (C) tire FMUs: compliance, the law against the Python law, importers, a host without Python."""
+
+from __future__ import annotations
+
+import math
+import zipfile
+
+import numpy as np
+import pytest
+from fmu_helpers import assert_fmpy_matches_the_reference, assert_libcosim_matches_fmpy
+from native_fixtures import AWKWARD_DIR, c_host, extract, guid, native_fmus, run_host  # noqa: F401
+
+from build_scripts import build_fmu, load_kind
+from build_scripts.binary_exports import exported_names, fmi_function_names
+from build_scripts.check import state_round_trip_problems
+from build_scripts.compliance import compliance_problems
+from build_scripts.native import _fmpy_headers
+from build_scripts.reference import read_reference
+from build_scripts.runners import open_fmpy_slave, variable_refs
+from identification import tire_law
+
+KINDS = ("point_contact", "extended_tire")
+G = 9.80665
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_compliant_and_reproduces_the_python_reference_in_fmpy_and_libcosim(native_fmus, kind):
+    fmu, k = native_fmus[kind], load_kind(kind)
+    assert compliance_problems(fmu) == []
+    inputs, outputs = k.names("input"), k.names("output")
+    reals = [n for n in outputs if k.variable(n).type == "Real"]
+    assert_fmpy_matches_the_reference(fmu, k, inputs, outputs, reals, start_values=k.reference_start_values)
+    assert_libcosim_matches_fmpy(fmu, kind, inputs, outputs, start_values=k.reference_start_values)
+    ref = read_reference(kind)
+    signals = {n: ref[n] for n in ["time", *inputs]}
+    assert state_round_trip_problems(fmu, signals, outputs, k.reference_start_values) == []
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_default_experiment_shows_the_static_equilibrium(native_fmus, kind):
+    from fmpy import simulate_fmu
+
+    res = simulate_fmu(str(native_fmus[kind]), output=["force_z", "deflection", "in_contact"])
+    assert float(res["time"][-1]) > 0.0
+    np.testing.assert_allclose(res["force_z"], 15000.0, rtol=1e-12)       # the default wheel load, N
+    np.testing.assert_allclose(res["deflection"], 15000.0 / 400e3, rtol=1e-12)  # W / k, m
+    assert res["in_contact"].all()
+
+
+def test_progressive_tire_starts_at_its_equilibrium_off_the_built_in_cleat(tmp_path):
+    from fmpy import simulate_fmu
+
+    starts = {"stiffness_exponent": 1.5, "static_load": 12000.0, "cleat_height": 0.04, "cleat_x": 0.0,
+              "footprint_length": 0.3, "lug_amplitude": 0.0}
+    fmu = build_fmu("extended_tire", tmp_path / "p.fmu", start_values=starts, backend="native",
+                    platforms=["linux64"])
+    res = simulate_fmu(str(fmu), output=["force_z", "deflection", "road_effective_z"])
+    np.testing.assert_allclose(res["force_z"], 12000.0, rtol=1e-12)
+    np.testing.assert_allclose(res["deflection"], 1.5 * 12000.0 / 400e3, rtol=1e-12)  # n W / k
+    assert np.all(res["road_effective_z"] == 0.0)  # not on the cleat
+
+
+def _draw_extended(rng):
+    """Random parameters (each option on or off) and inputs near the built-in cleat."""
+    on = rng.random(6) < 0.6
+    p = {"stiffness": rng.uniform(1e5, 1e6), "damping": rng.uniform(0.0, 8e3), "unloaded_radius": rng.uniform(0.4, 1.0),
+         "footprint_length": rng.uniform(0.05, 0.5) if on[0] else 0.0, "cleat_x": rng.uniform(-0.5, 0.5),
+         "cleat_height": rng.uniform(0.01, 0.08) if on[1] else 0.0, "cleat_width": rng.uniform(0.02, 0.3),
+         "unilateral": bool(on[2]), "stiffness_exponent": rng.uniform(0.6, 2.5) if on[3] else 1.0,
+         "static_load": rng.uniform(5e3, 3e4), "friction_force": rng.uniform(0.0, 800.0) if on[4] else 0.0,
+         "friction_velocity": rng.uniform(1e-3, 0.1), "lug_amplitude": rng.uniform(-3e-3, 3e-3) if on[5] else 0.0,
+         "lug_pitch": rng.uniform(0.1, 0.5), "lug_phase": rng.uniform(-4.0, 4.0)}
+    deflection = p["stiffness_exponent"] * p["static_load"] / p["stiffness"]
+    u = {"hub_z": p["unloaded_radius"] - deflection + rng.uniform(-0.08, 0.08), "hub_vz": rng.normal(0, 0.5),
+         "road_z": rng.uniform(-0.02, 0.02), "road_vz": rng.normal(0, 0.3),
+         "hub_x": p["cleat_x"] + rng.uniform(-0.4, 0.6), "hub_vx": rng.uniform(0.0, 4.0)}
+    return p, u
+
+
+def _agree(got, want, what):
+    assert abs(got - want) <= 1e-12 * abs(want), f"{what}: C {got!r}, Python {want!r}"
+
+
+def test_c_law_agrees_with_the_python_law_on_random_inputs_over_every_option(native_fmus):
+    fmu = native_fmus["extended_tire"]
+    refs = variable_refs(fmu)
+    real_params = [n for n in tire_law.EXTENDED_DEFAULTS if n != "unilateral"]
+    outputs = ["force_z", "deflection", "deflection_rate", "road_effective_z"]
+    rng = np.random.default_rng(20261123)
+    s = open_fmpy_slave(fmu)
+    seen_contact = set()
+    try:
+        for i in range(3000):
+            p, u = _draw_extended(rng)
+            s.setReal([refs[n][0] for n in real_params], [p[n] for n in real_params])
+            s.setBoolean([refs["unilateral"][0]], [p["unilateral"]])
+            s.setReal([refs[n][0] for n in u], list(u.values()))
+            got = s.getReal([refs[n][0] for n in outputs])
+            contact = s.getBoolean([refs["in_contact"][0]])[0]
+            f, d, dd, c, road = tire_law.extended_tire(u["hub_z"], u["hub_vz"], u["hub_x"], u["hub_vx"], u["road_z"],
+                                                       u["road_vz"], p)
+            for name, a, b in zip(outputs, got, (f, d, dd, road)):
+                _agree(a, b, f"draw {i}: {name}")
+            assert bool(contact) == bool(c), f"draw {i}"
+            seen_contact.add((p["unilateral"], bool(c)))
+        s.terminate()
+    finally:
+        s.freeInstance()
+    assert seen_contact == {(False, False), (False, True), (True, False), (True, True)}
+
+
+def test_c_point_contact_agrees_with_the_python_law(native_fmus):
+    fmu = native_fmus["point_contact"]
+    refs = variable_refs(fmu)
+    names = ["hub_z", "hub_vz", "road_z", "road_vz", "stiffness", "damping", "unloaded_radius"]
+    rng = np.random.default_rng(7)
+    s = open_fmpy_slave(fmu)
+    try:
+        for _ in range(1000):
+            v = [rng.uniform(0.5, 1.0), rng.normal(0, 1), rng.uniform(-0.05, 0.05), rng.normal(0, 1),
+                 rng.uniform(1e5, 1e6), rng.uniform(0, 1e4), rng.uniform(0.5, 1.0)]
+            s.setReal([refs[n][0] for n in names], v)
+            got = s.getReal([refs[n][0] for n in ("force_z", "deflection", "deflection_rate")])
+            want = tire_law.point_contact(*v)
+            for a, b in zip(got, want[:3]):
+                _agree(a, b, "point contact")
+            assert bool(s.getBoolean([refs["in_contact"][0]])[0]) == bool(want[3])
+        s.terminate()
+    finally:
+        s.freeInstance()
+
+
+def test_refused_values_are_fmi2Error_with_a_logged_reason_and_the_instance_stays_usable(native_fmus):
+    from fmpy.fmi1 import FMICallException
+
+    fmu = native_fmus["extended_tire"]
+    refs = {n: r for n, (r, _) in variable_refs(fmu).items()}
+    messages = []
+    s = open_fmpy_slave(fmu, logger=lambda status, category, message: messages.append((status, category, message)))
+    try:
+        before = s.getReal([refs["stiffness"], refs["force_z"]])
+        for name, value, reason in (("stiffness", -1.0, "stiffness must be > 0"), ("hub_z", math.nan, "finite"),
+                                    ("damping", math.inf, "finite"), ("force_z", 1.0, "is not a Real")):
+            with pytest.raises(FMICallException) as info:
+                s.setReal([refs[name]], [value])
+            assert info.value.status == 3  # fmi2Error, not fmi2Fatal
+            assert any(st == 3 and cat == "logStatusError" and reason in m for st, cat, m in messages), messages
+            assert s.getReal([refs["stiffness"], refs["force_z"]]) == before
+        s.doStep(0.0, 1e-3)
+        s.setReal([refs["stiffness_exponent"]], [1.5])  # needs static_load > 0 (default 0)
+        with pytest.raises(FMICallException):
+            s.getReal([refs["force_z"]])
+        assert "static_load must be > 0 N" in messages[-1][2]
+        s.setReal([refs["static_load"]], [15000.0])
+        assert s.getReal([refs["force_z"]])[0] > 0.0
+        s.doStep(1e-3, 1e-3)
+        s.terminate()
+    finally:
+        s.freeInstance()
+
+
+def test_byte_identical_re_export_with_content_guid_fixed_dates_mode_0644_and_no_build_machine_paths(tmp_path):
+    import os
+    import socket
+
+    starts = {"stiffness": 512345.0, "damping": 3210.0}
+    a = build_fmu("point_contact", tmp_path / "a.fmu", start_values=starts, backend="native")
+    (tmp_path / "sub").mkdir()
+    b = build_fmu("point_contact", tmp_path / "sub" / "b.fmu", start_values=starts, backend="native")
+    c = build_fmu("point_contact", tmp_path / "c.fmu", start_values={**starts, "damping": 3211.0}, backend="native")
+    assert a.read_bytes() == b.read_bytes()
+    assert guid(a) != guid(c)
+    with zipfile.ZipFile(a) as z:
+        infos = z.infolist()
+        blob = b"".join(z.read(i) for i in infos)
+    assert [i.filename for i in infos] == sorted(i.filename for i in infos)
+    assert all(i.date_time == (1980, 1, 1, 0, 0, 0) and (i.external_attr >> 16) & 0o777 == 0o644 for i in infos)
+    for secret in {str(tmp_path), os.path.expanduser("~"), os.getcwd(), socket.gethostname(), "cleatfmu_cc_"} - {
+            "/", ""}:
+        assert secret.encode() not in blob, secret
+
+
+def test_two_compilations_give_byte_identical_binaries(tmp_path, monkeypatch):
+    from build_scripts import native
+    from build_scripts.native_fmu import _kind_for_native
+
+    kind = _kind_for_native(load_kind("point_contact"))
+    builds = []
+    for run in ("first", "second"):
+        monkeypatch.setenv("CLEATFMU_CACHE_DIR", str(tmp_path / run))  # empty: compile again
+        builds.append(native.compile_binaries(kind, 2, ["linux64", "win64", "darwin64"]))
+    assert builds[0] == builds[1]  # no link time, PDB signature or build path inside
+
+
+def test_windows_and_macos_binaries_export_every_fmi2_function(native_fmus):
+    required = fmi_function_names((_fmpy_headers() / "fmi2Functions.h").read_text())
+    assert len(required) >= 40
+    for kind, fmu in native_fmus.items():
+        with zipfile.ZipFile(fmu) as z:
+            names = [n for n in z.namelist() if n.startswith("binaries/")]
+            assert sorted(n.split("/")[1] for n in names) == ["darwin64", "linux64", "win64"]
+            for name in names:
+                if name.endswith((".dll", ".dylib")):
+                    assert required <= exported_names(z.read(name)), name
+
+
+def test_fmpy_runs_the_fmu_extracted_under_a_path_with_umlaut_hash_percent_and_spaces(native_fmus, tmp_path):
+    from fmpy import simulate_fmu
+
+    unzipped = extract(native_fmus["point_contact"], tmp_path / AWKWARD_DIR)
+    res = simulate_fmu(str(unzipped), output=["force_z"])
+    np.testing.assert_allclose(res["force_z"], 15000.0, rtol=1e-12)
+
+
+def test_c_host_without_python_equilibrium_uri_forms_and_no_leak(native_fmus, c_host, tmp_path):
+    fmu = native_fmus["point_contact"]
+    unzipped = extract(fmu, tmp_path / AWKWARD_DIR)
+    resources = unzipped / "resources"
+    uris = [resources.as_uri(), resources.as_uri() + "/", f"file:{resources}", f"file://localhost{resources}/",
+            str(resources)]
+    for uri in uris:
+        assert float(run_host(c_host, unzipped, uri, guid(fmu), "equilibrium")) == pytest.approx(15000.0, rel=1e-12)
+    growth = int(run_host(c_host, unzipped, resources.as_uri(), guid(fmu), "leak", 10000))
+    assert growth <= 1024 * 1024, f"RSS grew by {growth} bytes over 10000 instantiate/free cycles"
+
+
+def test_c_host_step_response_matches_the_python_law_and_the_damped_oscillator(c_host, tmp_path):
+    k, c, r0, load = 400e3, 20e3, 0.75, 15000.0
+    mass = load / G
+    fmu = build_fmu("point_contact", tmp_path / "pc.fmu", start_values={"damping": c}, backend="native",
+                    platforms=["linux64"])
+    unzipped = extract(fmu, tmp_path / AWKWARD_DIR)
+    h, n, height = 1e-4, 30000, 0.01
+    rows = np.array([[float(x) for x in line.split()] for line in
+                     run_host(c_host, unzipped, (unzipped / "resources").as_uri(), guid(fmu), "step", mass, height,
+                              n, h).splitlines()])
+    # The same master in Python with the Python law: identical to round-off.
+    z, v, t = r0 - load / k, 0.0, 0.0
+    for i in range(n):
+        f = tire_law.point_contact(z, v, height if t >= 0.1 else 0.0, 0.0, k, c, r0)[0]
+        v += h * (f / mass - G)
+        z += h * v
+        t = (i + 1) * h
+        if i % 1000 == 999 or i == n - 1:
+            np.testing.assert_allclose(rows[i, 1:4], [z, v, f], rtol=1e-12, atol=1e-12)
+    # Physics: the hub settles height higher; its overshoot is the damped oscillator's.
+    z0 = r0 - load / k
+    assert rows[-1, 1] - z0 == pytest.approx(height, rel=1e-4)
+    zeta = c / (2.0 * math.sqrt(k * mass))
+    overshoot = (rows[:, 1].max() - z0 - height) / height
+    assert overshoot == pytest.approx(math.exp(-zeta * math.pi / math.sqrt(1 - zeta ** 2)), rel=0.03)
+
+
+def test_binaries_are_cached_per_platform_and_law_version(native_fmus, tmp_path, monkeypatch):
+    import subprocess
+    import time
+
+    from build_scripts import native
+
+    # Warm cache (the session's FMUs): an export compiles nothing and takes under a second.
+    def no_compiler(*args, **kwargs):
+        raise AssertionError("compiled although the binaries are cached")
+
+    real_run = subprocess.run
+    monkeypatch.setattr(native.subprocess, "run", no_compiler)
+    start = time.perf_counter()
+    fmu = build_fmu("point_contact", tmp_path / "warm.fmu", backend="native")
+    assert time.perf_counter() - start <= 1.0
+    assert fmu.read_bytes() == native_fmus["point_contact"].read_bytes()
+    # An empty cache folder (CLEATFMU_CACHE_DIR) makes the build compile, into that folder.
+    monkeypatch.setattr(native.subprocess, "run", real_run)
+    monkeypatch.setenv("CLEATFMU_CACHE_DIR", str(tmp_path / "cache"))
+    build_fmu("point_contact", tmp_path / "cold.fmu", backend="native", platforms=["linux64"])
+    cached = list((tmp_path / "cache").rglob("CleatfmuPointContact.so"))
+    assert len(cached) == 1
+    with zipfile.ZipFile(tmp_path / "cold.fmu") as z:
+        assert z.read("binaries/linux64/CleatfmuPointContact.so") == cached[0].read_bytes()
+    # The key is the law version: another source gives another folder.
+    kind = load_kind("point_contact")
+    assert native.law_version(kind, 2) != native.law_version(kind, 3)

@@ -1,0 +1,103 @@
+"""The native (C) tire FMUs as FMI 3.0 co-simulation FMUs: compliance, reference, state, platforms."""
+
+from __future__ import annotations
+
+import math
+import struct
+import zipfile
+
+import numpy as np
+import pytest
+from native_fixtures import AWKWARD_DIR, extract, native_fmus3  # noqa: F401
+
+from build_scripts import build_fmu, load_kind
+from build_scripts.binary_exports import exported_names, fmi_function_names
+from build_scripts.compliance import compliance_problems
+from build_scripts.native import _fmpy_headers
+from build_scripts.reference import read_reference
+from build_scripts.runners import simulate_fmpy
+from build_scripts.runners3 import fmi3_state_round_trip_problems, open_fmi3_slave, run_fmi3_loop
+
+KINDS = ("point_contact", "extended_tire")
+#: FMI 3.0 platform folder -> (executable format, machine): ELF e_machine, PE machine, Mach-O cputype.
+MACHINES = {"x86_64-linux": ("elf", 62), "aarch64-linux": ("elf", 183), "x86_64-windows": ("pe", 0x8664),
+            "x86_64-darwin": ("macho", 0x01000007), "aarch64-darwin": ("macho", 0x0100000C)}
+
+
+def machine(data: bytes) -> tuple[str, int]:
+    """Executable format and target machine of a shared library."""
+    if data[:4] == b"\x7fELF":
+        return "elf", struct.unpack_from("<H", data, 18)[0]
+    if data[:2] == b"MZ":
+        return "pe", struct.unpack_from("<H", data, struct.unpack_from("<I", data, 0x3C)[0] + 4)[0]
+    return "macho", struct.unpack_from("<I", data, 4)[0]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_fmi3_fmu_is_compliant_and_reproduces_the_python_reference(native_fmus3, kind):
+    fmu, k = native_fmus3[kind], load_kind(kind)
+    assert compliance_problems(fmu) == []  # includes fmpy's validate_fmu, buildDescription.xml too
+    inputs, outputs = k.names("input"), k.names("output")
+    ref = read_reference(kind)
+    signals = {n: ref[n] for n in ["time", *inputs]}
+    sim = simulate_fmpy(fmu, signals, outputs, start_values=k.reference_start_values)
+    loop = run_fmi3_loop(fmu, signals, outputs, start_values=k.reference_start_values)
+    for name in outputs:
+        np.testing.assert_allclose(sim[name], ref[name], rtol=k.reference_rtol, atol=k.reference_atol)
+        np.testing.assert_allclose(loop[name], ref[name][1:], rtol=k.reference_rtol, atol=k.reference_atol)
+    assert fmi3_state_round_trip_problems(fmu, signals, outputs, k.reference_start_values) == []
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_fmi3_default_experiment_shows_the_static_equilibrium(native_fmus3, kind):
+    from fmpy import simulate_fmu
+
+    res = simulate_fmu(str(native_fmus3[kind]), output=["force_z", "in_contact"])
+    assert float(res["time"][-1]) > 0.0
+    np.testing.assert_allclose(res["force_z"], 15000.0, rtol=1e-12)
+    assert res["in_contact"].all()
+
+
+def test_fmi3_binaries_for_five_platforms_export_every_fmi3_function(native_fmus3):
+    required = fmi_function_names((_fmpy_headers() / "fmi3Functions.h").read_text())
+    assert len(required) >= 70
+    with zipfile.ZipFile(native_fmus3["extended_tire"]) as z:
+        binaries = {n.split("/")[1]: z.read(n) for n in z.namelist() if n.startswith("binaries/")}
+        assert "sources/buildDescription.xml" in z.namelist()
+    assert sorted(binaries) == sorted(MACHINES)
+    for platform, data in binaries.items():
+        assert machine(data) == MACHINES[platform], platform
+        if MACHINES[platform][0] != "elf":
+            assert required <= exported_names(data), platform
+
+
+def test_fmi3_refused_value_is_fmi3Error_and_the_time_variable_reads_the_time(native_fmus3):
+    from fmpy.fmi1 import FMICallException
+
+    fmu = native_fmus3["point_contact"]
+    messages = []
+    s = open_fmi3_slave(fmu, log_message=lambda env, status, category, message: messages.append(
+        (status, category.decode(), message.decode())))
+    try:
+        with pytest.raises(FMICallException) as info:
+            s.setFloat64([4], [-1.0])  # stiffness
+        assert info.value.status == 3  # fmi3Error
+        assert any("stiffness must be > 0" in m for _, _, m in messages), messages
+        with pytest.raises(FMICallException):
+            s.setFloat64([0], [math.nan])  # hub_z
+        s.doStep(0.0, 0.25)
+        s.doStep(0.25, 0.25)
+        assert s.getFloat64([11]) == [0.5]  # the independent variable
+        assert s.getFloat64([4]) == [400e3]
+        s.terminate()
+    finally:
+        s.freeInstance()
+
+
+def test_fmi3_fmu_under_an_awkward_path_and_byte_identical_re_export(native_fmus3, tmp_path):
+    from fmpy import simulate_fmu
+
+    unzipped = extract(native_fmus3["point_contact"], tmp_path / AWKWARD_DIR)
+    np.testing.assert_allclose(simulate_fmu(str(unzipped), output=["force_z"])["force_z"], 15000.0, rtol=1e-12)
+    again = build_fmu("point_contact", tmp_path / "again.fmu", backend="native", fmi_version=3)
+    assert again.read_bytes() == native_fmus3["point_contact"].read_bytes()
