@@ -27,6 +27,7 @@ from ..recording import FRONT_TIRES
 from .joint_evidence import check_tractor
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
 from .joint_start import ENVELOPE_GUESS_M, body_start, refine_timing, starting_values
+from .select import periodic_start
 from .tractor import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, parameter_unit
 
 __all__ = ["TractorDiagnosis", "diagnose_tractor", "TractorCandidate"]
@@ -150,26 +151,6 @@ def _bic(sse_w: float, n: int, n_eff: float, p: int) -> float:
     return n_eff * math.log(sse_w / n) + p * math.log(n_eff)
 
 
-def _lug_start(pb: TractorProblem, tire: str, k: float, c: float, arrival: float):
-    """Frequency, road amplitude and phase of a steady periodic component before the impact in one channel."""
-    rec, t = pb.rec, pb.rec.time_s
-    pre = t < pb.first_impact_s - 0.05
-    if pre.sum() < 0.2 * rec.sample_rate_hz:
-        return None
-    x = rec.accel_m_s2[tire][pre] - np.mean(rec.accel_m_s2[tire][pre])
-    n = max(1 << 16, 1 << int(np.ceil(np.log2(4 * x.size))))
-    spec = np.abs(np.fft.rfft(x * np.hanning(x.size), n))
-    f = np.fft.rfftfreq(n, 1 / rec.sample_rate_hz)
-    band = (f >= 1.0) & (f <= 0.45 * pb.cutoff_hz)
-    freq = float(f[band][np.argmax(spec[band])])
-    w = 2 * np.pi * freq
-    b1, b2 = np.linalg.lstsq(np.column_stack([np.sin(w * t[pre]), np.cos(w * t[pre])]), x, rcond=None)[0]
-    m = rec.mass_kg(tire)
-    H = (k + 1j * w * c) / (k - m * w * w + 1j * w * c)
-    road = -(b1 + 1j * b2) / (w * w * H)
-    return freq, float(abs(road)), float(np.angle(road) + w * arrival)
-
-
 def _candidate_start(model: TractorFitModel, current: TractorFit, start0: dict) -> dict:
     pb = model.problem
     s = dict(current.params)
@@ -182,10 +163,12 @@ def _candidate_start(model: TractorFitModel, current: TractorFit, start0: dict) 
     if "periodic_disturbance" in model.effects and "periodic_disturbance" not in current.model.effects:
         arrivals = current.model.arrivals(current.params)
         for tire in pb.channels:
-            est = _lug_start(pb, tire, s[f"k_{tire}"], s[f"c_{tire}"], arrivals[tire]) or (10.0, 1e-4, 0.0)
+            est = periodic_start(pb.rec, tire, first_impact_s=pb.first_impact_s, cutoff_hz=pb.cutoff_hz,
+                                 k=s[f"k_{tire}"], c=s[f"c_{tire}"], arrival=arrivals[tire]) or \
+                {"lug_frequency": 10.0, "lug_amplitude": 1e-4, "lug_phase": 0.0}
             axle = "front" if tire in FRONT_TIRES else "rear"
-            s.setdefault(f"lug_frequency_{axle}", est[0])
-            s[f"lug_amplitude_{tire}"], s[f"lug_phase_{tire}"] = est[1], est[2]
+            s.setdefault(f"lug_frequency_{axle}", est["lug_frequency"])
+            s[f"lug_amplitude_{tire}"], s[f"lug_phase_{tire}"] = est["lug_amplitude"], est["lug_phase"]
     return {name: s[name] for name in model.names}
 
 

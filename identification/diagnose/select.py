@@ -126,23 +126,24 @@ def _starting_values(pb: Problem) -> dict:
     return start
 
 
-def _periodic_start(pb: Problem, k: float, c: float, arrival: float) -> dict | None:
-    """Frequency, road amplitude and phase of a steady periodic component before the impact."""
-    rec, t = pb.rec, pb.rec.time_s
-    pre = t < pb.first_impact_s - 0.05
+def periodic_start(rec, tire: str, *, first_impact_s: float, cutoff_hz: float, k: float, c: float,
+                   arrival: float) -> dict | None:
+    """Frequency, road amplitude and phase of a steady periodic component before the impact in one channel."""
+    t = rec.time_s
+    pre = t < first_impact_s - 0.05
     if pre.sum() < 0.2 * rec.sample_rate_hz:
         return None
-    x = rec.accel_m_s2[pb.tire][pre] - np.mean(rec.accel_m_s2[pb.tire][pre])
+    x = rec.accel_m_s2[tire][pre] - np.mean(rec.accel_m_s2[tire][pre])
     n = max(1 << 16, 1 << int(np.ceil(np.log2(4 * x.size))))
     spec = np.abs(np.fft.rfft(x * np.hanning(x.size), n))
     f = np.fft.rfftfreq(n, 1 / rec.sample_rate_hz)
-    band = (f >= 1.0) & (f <= 0.45 * pb.cutoff_hz)
+    band = (f >= 1.0) & (f <= 0.45 * cutoff_hz)
     freq = float(f[band][np.argmax(spec[band])])
     w = 2 * np.pi * freq
     basis = np.column_stack([np.sin(w * t[pre]), np.cos(w * t[pre])])
     b1, b2 = np.linalg.lstsq(basis, x, rcond=None)[0]
     accel = b1 + 1j * b2                       # a(t) = Im(accel e^{jωt})
-    m = rec.mass_kg(pb.tire)
+    m = rec.mass_kg(tire)
     H = (k + 1j * w * c) / (k - m * w * w + 1j * w * c)
     road = -accel / (w * w * H)
     return {"lug_amplitude": float(abs(road)), "lug_frequency": freq,
@@ -162,7 +163,8 @@ def _candidate_start(model: Model, current: Fit, pb: Problem, start0: dict) -> d
         s.setdefault(name, value)
     s.setdefault("footprint_other", s["footprint"])
     if "periodic_disturbance" in model.effects and "lug_frequency" not in s:
-        s.update(_periodic_start(pb, s["k"], s["c"], s["arrival"]) or
+        s.update(periodic_start(pb.rec, pb.tire, first_impact_s=pb.first_impact_s, cutoff_hz=pb.cutoff_hz,
+                                k=s["k"], c=s["c"], arrival=s["arrival"]) or
                  {"lug_amplitude": 1e-4, "lug_frequency": 10.0, "lug_phase": 0.0})
     if "enveloping" in model.effects and "enveloping" not in current.model.effects:
         s["arrival"] += s["footprint"] / 2 / pb.rec.speed_m_s
