@@ -278,3 +278,59 @@ def test_binaries_are_cached_per_platform_and_law_version(native_fmus, tmp_path,
     # The key is the law version: another source gives another folder.
     kind = load_kind("point_contact")
     assert native.law_version(kind, 2) != native.law_version(kind, 3)
+
+
+def test_call_sequence_log_categories_and_reset(native_fmus, tmp_path):
+    from fmpy import read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import FMU2Slave
+
+    fmu = native_fmus["point_contact"]
+    md = read_model_description(str(fmu))
+    s = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu, tmp_path / "x"), modelIdentifier="CleatfmuPointContact",
+                  instanceName="seq")
+    s.instantiate(loggingOn=True)
+    try:
+        with pytest.raises(FMICallException) as info:
+            s.doStep(0.0, 1e-3)  # before initialization
+        assert info.value.status == 3
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        with pytest.raises(FMICallException):
+            s.setupExperiment(startTime=0.0)  # only once, before initialization
+        with pytest.raises(FMICallException):
+            s.setDebugLogging(True, ["logNothing"])
+        s.setReal([4, 0], [5e5, 0.74])  # stiffness, hub_z
+        assert s.getReal([7])[0] == pytest.approx(5e5 * 0.01, rel=1e-12)
+        s.terminate()
+        with pytest.raises(FMICallException):
+            s.setReal([0], [0.7])  # after terminate
+        s.reset()  # back to the start values: k = 400 kN/m, hub at the 15 kN equilibrium
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        assert s.getReal([4])[0] == 400e3 and s.getReal([7])[0] == pytest.approx(15000.0, rel=1e-12)
+        s.terminate()
+    finally:
+        s.freeInstance()
+
+
+def test_log_categories_reach_the_importer(native_fmus):
+    from build_scripts.runners import open_fmpy_slave
+
+    messages = []
+    s = open_fmpy_slave(native_fmus["point_contact"],
+                        logger=lambda status, category, message: messages.append((status, category, message)))
+    try:
+        s.setDebugLogging(True, ["logCalls"])
+        s.doStep(0.0, 1e-3)
+        assert (0, "logCalls", "fmi2DoStep") in messages
+        s.setDebugLogging(False, ["logStatusError"])
+        count = len(messages)
+        with pytest.raises(Exception):
+            s.setReal([4], [-1.0])
+        assert not [m for m in messages[count:] if m[1] == "logStatusError"]  # category switched off
+        s.terminate()
+    finally:
+        s.freeInstance()
