@@ -1,6 +1,8 @@
-"""Build, complete and check the project's FMI 2.0 co-simulation FMUs.
+"""Build, complete and check the project's FMI 2.0 and 3.0 co-simulation FMUs.
 
-* :func:`build_fmu` — build an FMU of a kind in ``fmu_src`` with given start values;
+* :func:`build_fmu` — build an FMU of a kind in ``fmu_src`` with given start
+  values, with the pythonfmu backend or the native (C) one
+  (:mod:`build_scripts.native`, :mod:`build_scripts.native_fmu`);
 * :mod:`build_scripts.check` — ``python -m build_scripts.check``: build every
   kind, validate it, simulate its default experiment with fmpy against the
   reference result and run it in libcosimpy;

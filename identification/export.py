@@ -245,8 +245,8 @@ def add_parser(subparsers) -> None:
     """Register ``cleatfmu export``."""
     p = subparsers.add_parser(
         "export", help="build a point-contact tire FMU from identified parameters",
-        description="Build an FMI 2.0 co-simulation FMU of the point-contact tire (spring k parallel to damper c) "
-                    "whose tunable parameters start at the values identified by 'cleatfmu identify --json'.")
+        description="Build an FMI 2.0 or 3.0 co-simulation FMU of the point-contact tire (spring k parallel to "
+                    "damper c) whose tunable parameters start at the values identified by 'cleatfmu identify --json'.")
     p.add_argument("params", metavar="PARAMS.json", help="output of 'cleatfmu identify --json'")
     p.add_argument("--tire", metavar="TIRE", help="tire to export (required when the file holds several)")
     p.add_argument("-o", "--output", metavar="FMU", help="FMU file to write (default: TIRE.fmu)")

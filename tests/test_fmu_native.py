@@ -200,8 +200,10 @@ def test_windows_and_macos_binaries_export_every_fmi2_function(native_fmus):
             names = [n for n in z.namelist() if n.startswith("binaries/")]
             assert sorted(n.split("/")[1] for n in names) == ["darwin64", "linux64", "win64"]
             for name in names:
+                data = z.read(name)
+                assert b"python" not in data.lower(), name  # no libpython, python3.dll or _Py symbols needed
                 if name.endswith((".dll", ".dylib")):
-                    assert required <= exported_names(z.read(name)), name
+                    assert required <= exported_names(data), name
 
 
 def test_fmpy_runs_the_fmu_extracted_under_a_path_with_umlaut_hash_percent_and_spaces(native_fmus, tmp_path):
@@ -278,3 +280,71 @@ def test_binaries_are_cached_per_platform_and_law_version(native_fmus, tmp_path,
     # The key is the law version: another source gives another folder.
     kind = load_kind("point_contact")
     assert native.law_version(kind, 2) != native.law_version(kind, 3)
+
+
+def test_call_sequence_log_categories_and_reset(native_fmus, tmp_path):
+    from fmpy import read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import FMU2Slave
+
+    fmu = native_fmus["point_contact"]
+    md = read_model_description(str(fmu))
+    s = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu, tmp_path / "x"), modelIdentifier="CleatfmuPointContact",
+                  instanceName="seq")
+    # fmpy's default callbacks reach, through its logger proxy, the last Python logger any instance
+    # registered (maybe freed by now): instantiate without logging.
+    s.instantiate(loggingOn=False)
+    try:
+        with pytest.raises(FMICallException) as info:
+            s.doStep(0.0, 1e-3)  # before initialization
+        assert info.value.status == 3
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        with pytest.raises(FMICallException):
+            s.setupExperiment(startTime=0.0)  # only once, before initialization
+        with pytest.raises(FMICallException):
+            s.setDebugLogging(True, ["logNothing"])
+        s.setReal([4, 0], [5e5, 0.74])  # stiffness, hub_z
+        assert s.getReal([7])[0] == pytest.approx(5e5 * 0.01, rel=1e-12)
+        s.terminate()
+        with pytest.raises(FMICallException):
+            s.setReal([0], [0.7])  # after terminate
+        s.reset()  # back to the start values: k = 400 kN/m, hub at the 15 kN equilibrium
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        assert s.getReal([4])[0] == 400e3 and s.getReal([7])[0] == pytest.approx(15000.0, rel=1e-12)
+        s.terminate()
+    finally:
+        s.freeInstance()
+
+
+def test_log_categories_reach_the_importer(native_fmus):
+    from build_scripts.runners import open_fmpy_slave
+
+    messages = []
+    s = open_fmpy_slave(native_fmus["point_contact"],
+                        logger=lambda status, category, message: messages.append((status, category, message)))
+    try:
+        s.setDebugLogging(True, ["logCalls"])
+        s.doStep(0.0, 1e-3)
+        assert (0, "logCalls", "fmi2DoStep") in messages
+        s.setDebugLogging(False, ["logStatusError"])
+        count = len(messages)
+        with pytest.raises(Exception):
+            s.setReal([4], [-1.0])
+        assert not [m for m in messages[count:] if m[1] == "logStatusError"]  # category switched off
+        s.terminate()
+    finally:
+        s.freeInstance()
+
+
+def test_linux_binary_needs_only_libc_and_libm_of_glibc_2_17(native_fmus):
+    import re
+
+    with zipfile.ZipFile(native_fmus["extended_tire"]) as z:
+        data = z.read("binaries/linux64/CleatfmuExtendedTire.so")
+    versions = {tuple(map(int, v)) for v in re.findall(rb"GLIBC_(\d+)\.(\d+)", data)}
+    assert versions and max(versions) <= (2, 17), versions
+    assert b"libpython" not in data and b"_Py_NoneStruct" not in data

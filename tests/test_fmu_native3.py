@@ -67,6 +67,7 @@ def test_fmi3_binaries_for_five_platforms_export_every_fmi3_function(native_fmus
     assert sorted(binaries) == sorted(MACHINES)
     for platform, data in binaries.items():
         assert machine(data) == MACHINES[platform], platform
+        assert b"python" not in data.lower(), platform
         if MACHINES[platform][0] != "elf":
             assert required <= exported_names(data), platform
 

@@ -31,7 +31,6 @@ int ci_load(CleatfmuInstance *s, const char *token, const char *resource_locatio
     memcpy(s->start, s->values, sizeof s->values);
     s->mode = CI_INSTANTIATED;
     s->stale = 1;
-    s->log_errors = 1;
     return 0;
 }
 

@@ -2,7 +2,9 @@
  *
  * Outputs are direct feedthrough (evaluated from the values set last, when read).
  * A refused value (wrong variable, non-finite, out of its range) makes the call
- * return fmi2Error with the reason logged; the instance keeps its previous values
+ * return fmi2Error with the reason logged (category logStatusError, when the
+ * importer instantiated with loggingOn or enabled it with fmi2SetDebugLogging;
+ * instantiation failures are always logged); the instance keeps its previous values
  * and stays usable.  Parameters that are invalid together make the next read,
  * step or exit from initialization mode fail the same way until they are fixed.
  */
@@ -53,7 +55,6 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     char msg[CLEATFMU_MESSAGE_SIZE];
     CleatfmuInstance *s, probe;
     (void)visible;
-    (void)loggingOn;
     if (functions == NULL) return NULL;
     memset(&probe, 0, sizeof probe);
     probe.log = log_fmi2;
@@ -69,6 +70,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         ci_fail(&probe, "fmi2Instantiate: %s", msg);
         return NULL;
     }
+    probe.log_errors = loggingOn ? 1 : 0; /* nothing is logged unless the importer asks for it */
     if (functions->allocateMemory && functions->freeMemory) {
         s = (CleatfmuInstance *)functions->allocateMemory(1, sizeof *s);
         probe.free_memory = functions->freeMemory;

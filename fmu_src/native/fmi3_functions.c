@@ -46,7 +46,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
                                          fmi3IntermediateUpdateCallback intermediateUpdate) {
     char msg[CLEATFMU_MESSAGE_SIZE];
     CleatfmuInstance *s, probe;
-    (void)visible; (void)loggingOn; (void)earlyReturnAllowed; (void)requiredIntermediateVariables;
+    (void)visible; (void)earlyReturnAllowed; (void)requiredIntermediateVariables;
     (void)intermediateUpdate;
     if (eventModeUsed) {
         early_log(instanceEnvironment, logMessage,
@@ -68,6 +68,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
         ci_fail(&probe, "fmi3InstantiateCoSimulation: %s", msg);
         return NULL;
     }
+    probe.log_errors = loggingOn ? 1 : 0; /* nothing is logged unless the importer asks for it */
     s = (CleatfmuInstance *)calloc(1, sizeof *s);
     if (s == NULL) return NULL;
     probe.free_memory = free;
