@@ -23,6 +23,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from ..waveform import long_run_variance_ratio
+from .fit import _exp
 from .tractor import SIGNED, TractorFitModel
 
 __all__ = ["TractorFit", "fit_tractor", "sse_of", "unexplained", "UNEXPLAINED_RATIO"]
@@ -30,10 +31,6 @@ __all__ = ["TractorFit", "fit_tractor", "sse_of", "unexplained", "UNEXPLAINED_RA
 #: A channel whose residual RMS exceeds this multiple of its noise RMS holds unexplained signal.
 UNEXPLAINED_RATIO = 1.5
 _DIFF_STEP = {"arrival": 2e-5, "stagger": 2e-5, "lug_phase": 1e-3, "lug_amplitude": 1e-3}
-
-
-def _exp(x: float) -> float:
-    return math.exp(min(float(x), 700.0))
 
 
 @dataclass(frozen=True, eq=False)

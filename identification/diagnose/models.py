@@ -127,6 +127,29 @@ class Problem:
         return max(self.sig.noise_m_s2, 1e-6)
 
 
+def tire_law_parameters(rec: Recording, tire: str, effects, *, k: float, c: float, footprint=None, exponent=None,
+                        friction=None, lug=None) -> dict:
+    """The extended tire-law parameters of one tire of a fitting model (both the single-tire and the joint one).
+
+    `lug` is (amplitude m, frequency Hz, phase rad); every tire-side effect in
+    `effects` takes its parameter from the keyword of the same meaning.
+    """
+    p = dict(tire_law.EXTENDED_DEFAULTS)
+    p.update(stiffness=k, damping=c, unloaded_radius=_UNLOADED_RADIUS_M, static_load=rec.wheel_load_N[tire],
+             unilateral="lift_off" in effects)
+    if "enveloping" in effects:
+        p.update(footprint_length=footprint, cleat_x=0.0, cleat_height=rec.cleat_height_m,
+                 cleat_width=rec.cleat_width_m)
+    if "nonlinear_stiffness" in effects:
+        p.update(stiffness_exponent=exponent)
+    if "friction_damping" in effects:
+        p.update(friction_force=friction, friction_velocity=FRICTION_VELOCITY_M_S)
+    if "periodic_disturbance" in effects:
+        amplitude, frequency, phase = lug
+        p.update(lug_amplitude=amplitude, lug_pitch=rec.speed_m_s / frequency, lug_phase=phase)
+    return p
+
+
 class Model:
     """The baseline corner plus a set of effects, with its parameter vector.
 
@@ -166,24 +189,14 @@ class Model:
     # ------------------------------------------------------------------ parameters -> tire laws
     def tire_parameters(self, theta: dict, which: str = "tire") -> dict:
         """Extended-tire law parameters (see :data:`identification.tire_law.EXTENDED_DEFAULTS`)."""
-        pb, rec = self.problem, self.problem.rec
+        pb = self.problem
         own = which == "tire"
-        name = pb.tire if own else pb.other
-        p = dict(tire_law.EXTENDED_DEFAULTS)
-        p.update(stiffness=theta["k" if own else "k_other"], damping=theta["c" if own else "c_other"],
-                 unloaded_radius=_UNLOADED_RADIUS_M, static_load=rec.wheel_load_N[name],
-                 unilateral="lift_off" in self.effects)
-        if "enveloping" in self.effects:
-            p.update(footprint_length=theta["footprint" if own else "footprint_other"], cleat_x=0.0,
-                     cleat_height=rec.cleat_height_m, cleat_width=rec.cleat_width_m)
-        if "nonlinear_stiffness" in self.effects:
-            p.update(stiffness_exponent=theta["exponent"])
-        if "friction_damping" in self.effects:
-            p.update(friction_force=theta["friction"], friction_velocity=FRICTION_VELOCITY_M_S)
-        if "periodic_disturbance" in self.effects:
-            p.update(lug_amplitude=theta["lug_amplitude"], lug_pitch=rec.speed_m_s / theta["lug_frequency"],
-                     lug_phase=theta["lug_phase"])
-        return p
+        return tire_law_parameters(
+            pb.rec, pb.tire if own else pb.other, self.effects, k=theta["k" if own else "k_other"],
+            c=theta["c" if own else "c_other"], footprint=theta.get("footprint" if own else "footprint_other"),
+            exponent=theta.get("exponent"), friction=theta.get("friction"),
+            lug=(theta["lug_amplitude"], theta["lug_frequency"], theta["lug_phase"])
+            if "periodic_disturbance" in self.effects else None)
 
     # ------------------------------------------------------------------ simulation
     def simulate(self, theta: dict, *, step_s: float | None = None):

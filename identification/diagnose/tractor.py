@@ -28,13 +28,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import tire_law
 from ..errors import InputError
 from ..model import Body, Cleat, TractorModel
 from ..model.kernels import run_model
 from ..preprocess import DEFAULT_CUTOFF_HZ, lowpass, preprocess
 from ..recording import FRONT_TIRES, TIRES, Recording
-from .models import FRICTION_VELOCITY_M_S
+from .models import _UNLOADED_RADIUS_M as UNLOADED_RADIUS_M, tire_law_parameters
 
 __all__ = ["EFFECTS", "TIRE_EFFECTS", "BODY_EFFECTS", "TractorProblem", "TractorFitModel", "parameter_unit"]
 
@@ -55,7 +54,6 @@ _UNITS = {"k": ("N/m", "tire stiffness (tangent at the static load)"), "c": ("N 
           "lug_phase": ("rad", "phase of the periodic excitation")}
 #: Signed parameters (the others are positive and fitted as logarithms).
 SIGNED = ("arrival", "stagger", "lug_amplitude", "lug_phase")
-UNLOADED_RADIUS_M = 0.75
 LEAD_S = 0.05
 PRE_S = 0.3
 DEFAULT_STEP_S = 1e-3
@@ -179,22 +177,12 @@ class TractorFitModel:
 
     def law(self, theta: dict, tire: str) -> dict:
         """The extended tire-law parameters of one tire."""
-        rec = self.problem.rec
-        p = dict(tire_law.EXTENDED_DEFAULTS)
-        p.update(stiffness=theta[f"k_{tire}"], damping=theta[f"c_{tire}"], unloaded_radius=UNLOADED_RADIUS_M,
-                 static_load=rec.wheel_load_N[tire], unilateral="lift_off" in self.effects)
-        if "enveloping" in self.effects:
-            p.update(footprint_length=theta[f"footprint_{_axle(tire)}"], cleat_x=0.0,
-                     cleat_height=rec.cleat_height_m, cleat_width=rec.cleat_width_m)
-        if "nonlinear_stiffness" in self.effects:
-            p.update(stiffness_exponent=theta["exponent"])
-        if "friction_damping" in self.effects:
-            p.update(friction_force=theta["friction"], friction_velocity=FRICTION_VELOCITY_M_S)
-        if "periodic_disturbance" in self.effects:
-            p.update(lug_amplitude=theta[f"lug_amplitude_{tire}"],
-                     lug_pitch=rec.speed_m_s / theta[f"lug_frequency_{_axle(tire)}"],
-                     lug_phase=theta[f"lug_phase_{tire}"])
-        return p
+        axle = _axle(tire)
+        return tire_law_parameters(
+            self.problem.rec, tire, self.effects, k=theta[f"k_{tire}"], c=theta[f"c_{tire}"],
+            footprint=theta.get(f"footprint_{axle}"), exponent=theta.get("exponent"), friction=theta.get("friction"),
+            lug=(theta[f"lug_amplitude_{tire}"], theta[f"lug_frequency_{axle}"], theta[f"lug_phase_{tire}"])
+            if "periodic_disturbance" in self.effects else None)
 
     def body(self, theta: dict) -> Body:
         pb, rec = self.problem, self.problem.rec
