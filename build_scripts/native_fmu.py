@@ -55,7 +55,8 @@ def equilibrium_starts(kind: FmuKind, starts: dict, given: dict, static_load_n: 
             if starts["hub_x"] >= reach - 1e-9:
                 out["hub_x"] = reach - 1.0
         cleat, _ = footprint_cleat(out["hub_x"], starts["footprint_length"], starts["cleat_x"],
-                                   starts["cleat_height"], starts["cleat_width"])
+                                   starts["cleat_height"], starts["cleat_width"],
+                                   starts.get("parabolic_pressure", False))
         lug, _ = lug_road(out["hub_x"], starts["lug_amplitude"], starts["lug_pitch"], starts["lug_phase"])
         road = road + cleat + lug
     if "hub_z" not in given:

@@ -97,16 +97,36 @@ def _extended_tire_cleat_run(t: np.ndarray, starts: dict) -> dict:
 
 
 def _extended_tire_closed_form(inputs: dict, starts: dict) -> dict:
-    """The extended tire, vectorised; the enveloped cleat as a difference of its antiderivative.
+    """The extended tire, vectorised; the enveloped cleat as a difference of an antiderivative.
 
-    With G(s) = H clip(s − x_c, 0, w) the cleat height integrated up to s, the
-    footprint average is (G(x + ℓ/2) − G(x − ℓ/2)) / ℓ and its slope
+    Uniform footprint pressure: with G(s) = H clip(s − x_c, 0, w) the cleat
+    height integrated up to s, the footprint average is
+    (G(x + ℓ/2) − G(x − ℓ/2)) / ℓ and its slope
     H (1[x_c < x + ℓ/2 < x_c + w] − 1[x_c < x − ℓ/2 < x_c + w]) / ℓ.
+
+    Parabolic footprint pressure (``parabolic_pressure``): the pressure density
+    at distance ξ ahead of the footprint's centre is q(ξ) = 3 / (2ℓ) (1 − (2ξ/ℓ)²)
+    on |ξ| < ℓ/2, with the cumulative pressure Q(ξ) = 1/2 + 3/4 (s − s³/3),
+    s = clip(2ξ/ℓ, −1, 1); the cleat occupies ξ in [x_c − x, x_c + w − x], so
+    the average is H (Q(x_c + w − x) − Q(x_c − x)) and its slope along x is
+    H (q(x_c − x) − q(x_c + w − x)).
     """
     p = starts
     x, length, xc = inputs["hub_x"], p["footprint_length"], p["cleat_x"]
     height, width = p["cleat_height"], p["cleat_width"]
-    if length > 0.0:
+    if length > 0.0 and p.get("parabolic_pressure", False):
+        def cumulative(xi):
+            s = np.clip(2.0 * xi / length, -1.0, 1.0)
+            return 0.5 + 0.75 * (s - s ** 3 / 3.0)
+
+        def density(xi):
+            s = 2.0 * xi / length
+            return np.where(np.abs(s) < 1.0, 1.5 / length * (1.0 - s * s), 0.0)
+
+        lead, trail = xc + width - x, xc - x
+        cleat = height * (cumulative(lead) - cumulative(trail))
+        cleat_slope = height * (density(trail) - density(lead))
+    elif length > 0.0:
         ends = (x + 0.5 * length, x - 0.5 * length)
         integral = [height * np.clip(e - xc, 0.0, width) for e in ends]
         inside = [((e > xc) & (e < xc + width)).astype(float) for e in ends]

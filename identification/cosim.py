@@ -111,12 +111,15 @@ class TireFmu:
         s.enterInitializationMode()
         s.exitInitializationMode()
 
-    def parameters(self) -> dict[str, float]:
-        """Current values of the Real parameters (and ``unilateral`` if the FMU has it)."""
-        names = [v.name for v in self.md.modelVariables if v.causality == "parameter" and v.type == "Real"]
+    def parameters(self) -> dict[str, float | bool]:
+        """Current values of the parameters: the Real ones as floats, the Boolean ones
+        (``unilateral``, ``parabolic_pressure``, if the FMU has them) as bools."""
+        params = [v for v in self.md.modelVariables if v.causality == "parameter"]
+        names = [v.name for v in params if v.type == "Real"]
         values = dict(zip(names, self.slave.getReal([self.vr[n] for n in names])))
-        if "unilateral" in self.vr:
-            values["unilateral"] = bool(self.slave.getBoolean([self.vr["unilateral"]])[0])
+        flags = [v.name for v in params if v.type == "Boolean"]
+        if flags:
+            values.update(zip(flags, (bool(b) for b in self.slave.getBoolean([self.vr[n] for n in flags]))))
         return values
 
     def builtin_cleat(self) -> bool:

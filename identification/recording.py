@@ -15,9 +15,14 @@ A recording is two files with the same stem:
     ``{"format": "cleat-recording/1", "speed_kmh": float > 0,
     "cleat_height_mm": float > 0, "cleat_width_mm": float > 0,
     "wheelbase_m": float > 0, "wheel_load_kN": {"FL": float > 0, ...},
-    "description": str (optional)}``.  ``wheel_load_kN`` holds the static
-    wheel load of every channel (kN).  Unknown extra keys are kept and written
-    back unchanged.
+    "description": str (optional), "acquisition": {...} (optional)}``.
+    ``wheel_load_kN`` holds the static wheel load of every channel (kN).
+    ``acquisition`` describes the channels' analog chain:
+    ``{"anti_alias_order": int 0..12, "anti_alias_cutoff_hz": float (below
+    half the sampling rate), "highpass_hz": float >= 0}`` (see
+    :mod:`identification.acquisition`; absent: unknown, the models then assume
+    mean accelerations over each sample interval).  Unknown extra keys are kept
+    and written back unchanged.
 
 Inside the package every quantity is SI (m, s, N, kg); the file units above
 are converted at this boundary only.
@@ -34,10 +39,11 @@ from typing import Any, Mapping
 import numpy as np
 
 from ._files import atomic_write_texts
+from .acquisition import Acquisition, acquisition_from_sidecar
 from .errors import InputError
 
 __all__ = [
-    "FORMAT", "TIRES", "FRONT_TIRES", "REAR_TIRES", "STANDARD_GRAVITY",
+    "Acquisition", "FORMAT", "TIRES", "FRONT_TIRES", "REAR_TIRES", "STANDARD_GRAVITY",
     "JITTER_TOLERANCE", "MIN_SAMPLES", "MIN_DURATION_S",
     "Recording", "read_recording", "write_recording", "format_recording", "sidecar_path",
 ]
@@ -55,7 +61,7 @@ MIN_SAMPLES = 100
 MIN_DURATION_S = 1.0
 
 _POSITIVE_KEYS = ("speed_kmh", "cleat_height_mm", "cleat_width_mm", "wheelbase_m")
-_KNOWN_KEYS = {"format", "description", "wheel_load_kN", *_POSITIVE_KEYS}
+_KNOWN_KEYS = {"format", "description", "wheel_load_kN", "acquisition", *_POSITIVE_KEYS}
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,6 +88,8 @@ class Recording:
         Unknown sidecar keys, kept verbatim.
     source : str
         Where the recording came from (path of the CSV, or a label).
+    acquisition : Acquisition or None
+        The channels' analog chain, when the sidecar describes it.
     """
 
     time_s: np.ndarray
@@ -94,9 +102,14 @@ class Recording:
     description: str | None = None
     extra: dict[str, Any] = field(default_factory=dict)
     source: str = "<memory>"
+    acquisition: Acquisition | None = None
 
     def __post_init__(self):
         _check_time(self.source, np.asarray(self.time_s, dtype=float))
+        aa = self.acquisition
+        if aa is not None and aa.anti_alias_order and aa.anti_alias_cutoff_hz >= self.sample_rate_hz / 2:
+            raise InputError(self.source, f"acquisition: anti_alias_cutoff_hz {aa.anti_alias_cutoff_hz:g} Hz is "
+                                          f"not below half the sampling rate ({self.sample_rate_hz / 2:g} Hz)")
         for name in self.accel_m_s2:
             if name not in TIRES:
                 raise InputError(self.source, f"unknown channel {name!r} (allowed: {', '.join(TIRES)})")
@@ -144,6 +157,8 @@ class Recording:
         }
         if self.description is not None:
             meta["description"] = self.description
+        if self.acquisition is not None:
+            meta["acquisition"] = self.acquisition.to_json()
         meta.update(self.extra)
         return meta
 
@@ -197,6 +212,7 @@ def read_recording(csv_path: str | Path) -> Recording:
         description=meta.get("description"),
         extra={k: v for k, v in meta.items() if k not in _KNOWN_KEYS},
         source=str(csv_path),
+        acquisition=acquisition_from_sidecar(meta_path, meta["acquisition"]) if "acquisition" in meta else None,
     )
 
 

@@ -24,10 +24,21 @@ Extended tire (:func:`extended_tire`, scalar floats; every option's default
 reduces it to the point-contact law above):
 
 * **footprint** (``enveloping``): a built-in rectangular cleat (leading edge at
-  ``cleat_x``, height H, width w) is averaged over a uniform footprint of
-  length ℓ centred on the hub's longitudinal position x - the fixed-footprint
-  model - so the tire needs x and ẋ, not the road under its contact point:
-  r = H · overlap([x − ℓ/2, x + ℓ/2], [x_c, x_c + w]) / ℓ, ṙ = dr/dx · ẋ;
+  ``cleat_x``, height H, width w) is averaged over a footprint of length ℓ
+  centred on the hub's longitudinal position x - the fixed-footprint model -
+  so the tire needs x and ẋ, not the road under its contact point.  The
+  average is weighted by the contact pressure along the footprint:
+
+  - uniform (``parabolic_pressure`` false, the default):
+    r = H · overlap([x − ℓ/2, x + ℓ/2], [x_c, x_c + w]) / ℓ;
+  - parabolic (``parabolic_pressure`` true), pressure ∝ 1 − u², u = 2 ξ / ℓ
+    for ξ the distance from the footprint centre, zero at the footprint's ends
+    as on a real tire: r = H [P(x_c + w − x) − P(x_c − x)] with the cumulative
+    pressure P(ξ) = 1/2 + 3/4 (u − u³/3), u clipped to [−1, 1].
+
+  ṙ = dr/dx · ẋ.  A parabolic footprint of length ℓ spreads the cleat like a
+  uniform one of length ≈ 0.77 ℓ (same second moment), but with no kink where
+  the footprint's ends pass the cleat's edges;
 * **lugs** (``periodic_disturbance``): road-equivalent lug passing
   A sin(2π x / p + φ);
 * **progressive stiffness** (``nonlinear_stiffness``): elastic force
@@ -202,6 +213,7 @@ EXTENDED_DEFAULTS = {
     "damping": 2000.0,              # c, N s/m
     "unloaded_radius": 0.75,        # r0, m
     "footprint_length": 0.0,        # ℓ, m (0: the built-in cleat is felt under the contact point)
+    "parabolic_pressure": False,    # footprint pressure parabolic (else uniform)
     "cleat_x": 0.0,                 # leading edge of the built-in cleat, m (longitudinal)
     "cleat_height": 0.0,            # H, m (0: no built-in cleat)
     "cleat_width": 0.1,             # w, m
@@ -216,19 +228,25 @@ EXTENDED_DEFAULTS = {
 }
 
 
-def footprint_cleat(hub_x_m, footprint_m, cleat_x_m, cleat_height_m, cleat_width_m):
+def footprint_cleat(hub_x_m, footprint_m, cleat_x_m, cleat_height_m, cleat_width_m, parabolic=False):
     """Built-in cleat seen by the tire at longitudinal position x: height (m) and slope dr/dx (-).
 
-    With a footprint ℓ > 0 the cleat height is averaged over [x − ℓ/2, x + ℓ/2]
-    (uniform contact pressure); with ℓ = 0 it is the height under the contact
-    point, a rectangular pulse whose slope is zero except at its edges (where
-    it is a step the importer must treat as such).
+    With a footprint ℓ > 0 the cleat height is averaged over [x − ℓ/2, x + ℓ/2],
+    weighted by a uniform or (`parabolic`) a parabolic contact pressure; with
+    ℓ = 0 it is the height under the contact point, a rectangular pulse whose
+    slope is zero except at its edges (where it is a step the importer must
+    treat as such).
     """
     h, w, xc = cleat_height_m, cleat_width_m, cleat_x_m
     if h == 0.0:
         return 0.0, 0.0
     if footprint_m <= 0.0:
         return (h if xc <= hub_x_m < xc + w else 0.0), 0.0
+    if parabolic:
+        u1 = min(1.0, max(-1.0, 2.0 * (xc + w - hub_x_m) / footprint_m))
+        u0 = min(1.0, max(-1.0, 2.0 * (xc - hub_x_m) / footprint_m))
+        return (0.75 * h * ((u1 - u1 * u1 * u1 / 3.0) - (u0 - u0 * u0 * u0 / 3.0)),
+                1.5 * h / footprint_m * (u1 * u1 - u0 * u0))
     lo, hi = hub_x_m - 0.5 * footprint_m, hub_x_m + 0.5 * footprint_m
     left, right = max(lo, xc), min(hi, xc + w)
     if right <= left:
@@ -280,7 +298,7 @@ def extended_tire(hub_z_m, hub_vz_m_s, hub_x_m, hub_vx_m_s, road_z_m, road_vz_m_
         Effective road height under the tire, m.
     """
     cleat, cleat_slope = footprint_cleat(hub_x_m, p["footprint_length"], p["cleat_x"], p["cleat_height"],
-                                         p["cleat_width"])
+                                         p["cleat_width"], p["parabolic_pressure"])
     lug, lug_slope = lug_road(hub_x_m, p["lug_amplitude"], p["lug_pitch"], p["lug_phase"])
     road = road_z_m + cleat + lug
     d = p["unloaded_radius"] - (hub_z_m - road)
@@ -316,8 +334,9 @@ def extended_parameter_problem(p):
             return problem
     if p["stiffness_exponent"] != 1.0 and not p["static_load"] > 0:
         return "static_load must be > 0 N when stiffness_exponent != 1"
-    if not isinstance(p["unilateral"], bool):
-        return f"unilateral must be a Boolean, got {p['unilateral']!r}"
+    for name in ("unilateral", "parabolic_pressure"):
+        if not isinstance(p[name], bool):
+            return f"{name} must be a Boolean, got {p[name]!r}"
     return None
 
 
@@ -331,6 +350,7 @@ def extended_force_fn(p):
     """
     k, c, r0 = float(p["stiffness"]), float(p["damping"]), float(p["unloaded_radius"])
     fp, xc, hc, wc = p["footprint_length"], p["cleat_x"], p["cleat_height"], p["cleat_width"]
+    parabolic = bool(p["parabolic_pressure"])
     n, w_load = p["stiffness_exponent"], p["static_load"]
     fc, vf = p["friction_force"], p["friction_velocity"]
     la, lp, lph = p["lug_amplitude"], p["lug_pitch"], p["lug_phase"]
@@ -342,7 +362,7 @@ def extended_force_fn(p):
 
     def force(hub_z, hub_vz, hub_x, hub_vx, road_z, road_vz):
         if use_cleat:
-            cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc)
+            cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc, parabolic)
         else:
             cleat, cleat_slope = 0.0, 0.0
         if use_lug:
@@ -367,7 +387,7 @@ def extended_force_fn(p):
 #: Order of the extended tire's parameters in the flat vector of :func:`tire_force`.
 LAW_FIELDS = ("stiffness", "damping", "unloaded_radius", "footprint_length", "cleat_x", "cleat_height",
               "cleat_width", "unilateral", "stiffness_exponent", "static_load", "friction_force",
-              "friction_velocity", "lug_amplitude", "lug_pitch", "lug_phase")
+              "friction_velocity", "lug_amplitude", "lug_pitch", "lug_phase", "parabolic_pressure")
 
 
 def law_vector(p) -> list:
@@ -392,6 +412,11 @@ def tire_force(hub_z, hub_vz, hub_x, hub_vx, road_z, road_vz, q):
         if fp <= 0.0:
             if xc <= hub_x < xc + wc:
                 cleat = hc
+        elif q[15] != 0.0:
+            u1 = min(1.0, max(-1.0, 2.0 * (xc + wc - hub_x) / fp))
+            u0 = min(1.0, max(-1.0, 2.0 * (xc - hub_x) / fp))
+            cleat = 0.75 * hc * ((u1 - u1 * u1 * u1 / 3.0) - (u0 - u0 * u0 * u0 / 3.0))
+            cleat_slope = 1.5 * hc / fp * (u1 * u1 - u0 * u0)
         else:
             lo, hi = hub_x - 0.5 * fp, hub_x + 0.5 * fp
             left, right = max(lo, xc), min(hi, xc + wc)

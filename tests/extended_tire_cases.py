@@ -8,21 +8,27 @@ import identification.tire_law as law
 
 KIND = "extended_tire"
 INPUTS = ["hub_z", "hub_vz", "road_z", "road_vz", "hub_x", "hub_vx"]
-REAL_PARAMS = [n for n in law.EXTENDED_DEFAULTS if n != "unilateral"]
+BOOL_PARAMS = ["unilateral", "parabolic_pressure"]
+REAL_PARAMS = [n for n in law.EXTENDED_DEFAULTS if n not in BOOL_PARAMS]
 REAL_OUTPUTS = ["force_z", "deflection", "deflection_rate", "road_effective_z"]
 OUTPUTS = REAL_OUTPUTS + ["in_contact"]
+#: Option sets of the random cases; "footprint" has a uniform contact pressure, "parabolic" a parabolic one.
+#: The last set switches every option on (the footprint parabolic).
 OPTION_SETS = [("footprint",), ("point_cleat",), ("unilateral",), ("progressive",), ("friction",), ("lugs",),
-               ("footprint", "unilateral", "progressive", "friction", "lugs")]
+               ("parabolic",), ("parabolic", "unilateral", "progressive", "friction", "lugs")]
 
 
 def random_parameters(rng, options) -> dict:
     """A valid parameter set with random k, c, r0 and the given options switched on."""
     p = dict(law.EXTENDED_DEFAULTS, stiffness=rng.uniform(1e5, 1.5e6), damping=rng.uniform(0.0, 2e4),
              unloaded_radius=rng.uniform(0.4, 1.0))
-    if "footprint" in options or "point_cleat" in options:
-        p.update(footprint_length=rng.uniform(0.05, 0.5) if "footprint" in options else 0.0,
+    footprint = "footprint" in options or "parabolic" in options
+    if footprint or "point_cleat" in options:
+        p.update(footprint_length=rng.uniform(0.05, 0.5) if footprint else 0.0,
                  cleat_x=rng.uniform(-1.0, 1.0), cleat_height=rng.uniform(0.01, 0.08),
                  cleat_width=rng.uniform(0.02, 0.3))
+    if "parabolic" in options:
+        p["parabolic_pressure"] = True
     if "unilateral" in options:
         p["unilateral"] = True
     if "progressive" in options:
@@ -45,7 +51,7 @@ def random_inputs(rng, p) -> list[float]:
 def set_parameters(s, vr, p) -> None:
     """Set every parameter of `p` in instance `s`."""
     s.setReal([vr[n] for n in REAL_PARAMS], [float(p[n]) for n in REAL_PARAMS])
-    s.setBoolean([vr["unilateral"]], [p["unilateral"]])
+    s.setBoolean([vr[n] for n in BOOL_PARAMS], [p[n] for n in BOOL_PARAMS])
 
 
 def read_outputs(s, vr) -> tuple:

@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from extended_tire_cases import (INPUTS, KIND, OPTION_SETS, OUTPUTS, REAL_OUTPUTS, REAL_PARAMS, law_outputs,
-                                 random_inputs, random_parameters, read_outputs, set_parameters)
+from extended_tire_cases import (BOOL_PARAMS, INPUTS, KIND, OPTION_SETS, OUTPUTS, REAL_OUTPUTS, REAL_PARAMS,
+                                 law_outputs, random_inputs, random_parameters, read_outputs, set_parameters)
 from fmu_helpers import initial_unknowns, kind_fixtures, model_description, output_dependencies
 
 import identification.tire_law as law
@@ -22,10 +22,25 @@ fmu, vr, slave = kind_fixtures(KIND)
 
 # -- the law ------------------------------------------------------------------------------------
 
+#: The variables in value-reference order: those of the first extended tire FMU, then the appended ones
+#: (value references never change, so that importers' connections and saved states keep their meaning).
+VALUE_REFERENCES = ["hub_z", "hub_vz", "road_z", "road_vz", "hub_x", "hub_vx", "stiffness", "damping",
+                    "unloaded_radius", "footprint_length", "cleat_x", "cleat_height", "cleat_width", "unilateral",
+                    "stiffness_exponent", "static_load", "friction_force", "friction_velocity", "lug_amplitude",
+                    "lug_pitch", "lug_phase", "force_z", "deflection", "deflection_rate", "in_contact",
+                    "road_effective_z",
+                    "parabolic_pressure"]  # appended
+
+
+def test_value_references_of_existing_variables_never_change(fmu, vr):
+    assert [v.name for v in load_kind(KIND).variables] == VALUE_REFERENCES
+    assert vr == {name: i for i, name in enumerate(VALUE_REFERENCES)}
+
+
 def test_parameters_are_the_laws_with_its_defaults(fmu):
     kind = load_kind(KIND)
     params = {v.name: v for v in kind.variables if v.causality == "parameter"}
-    assert list(params) == list(law.EXTENDED_DEFAULTS)
+    assert sorted(params) == sorted(law.EXTENDED_DEFAULTS)
     for name, default in law.EXTENDED_DEFAULTS.items():
         assert params[name].start == default and type(params[name].start) is type(default), name
         assert params[name].type == ("Boolean" if isinstance(default, bool) else "Real")
@@ -101,6 +116,69 @@ def test_enveloped_cleat_is_the_footprint_average_of_the_rectangle(slave, vr, hu
     ramp = 0.05 / 0.3 * speed  # d(road)/dt on the ramps: (H / l) * hub_vx
     slope = ramp if 0.35 < hub_x < 0.45 else -ramp if 0.65 < hub_x < 0.75 else 0.0
     assert rate == pytest.approx(slope, rel=1e-12, abs=1e-15)
+
+
+def _parabolic_cleat_by_quadrature(x, length, xc, height, width):
+    """The cleat height averaged over the footprint [x - l/2, x + l/2] with the parabolic pressure density
+    3/(2 l) (1 - u^2), u = 2 (s - x) / l, integrated numerically over the part of the cleat inside it."""
+    from scipy.integrate import quad
+
+    lo, hi = max(x - 0.5 * length, xc), min(x + 0.5 * length, xc + width)
+    if hi <= lo:
+        return 0.0
+    value, _ = quad(lambda s: 1.5 / length * (1.0 - (2.0 * (s - x) / length) ** 2), lo, hi,
+                    epsabs=1e-14, epsrel=1e-13)
+    return height * value
+
+
+@pytest.mark.parametrize("length, width", [(0.3, 0.1), (0.08, 0.2), (0.25, 0.25)])
+def test_parabolic_footprint_is_the_pressure_weighted_average_of_the_rectangle(length, width):
+    """The law's parabolic branch against quadrature (height) and central differences of it (slope)."""
+    from scipy.integrate import quad
+
+    xc, height, h, speed = 0.5, 0.05, 1e-6, 2.0
+    p = {**law.EXTENDED_DEFAULTS, "footprint_length": length, "cleat_x": xc, "cleat_height": height,
+         "cleat_width": width, "parabolic_pressure": True}
+    force_fn, q = law.extended_force_fn(p), law.law_vector(p)
+    # where an end of the footprint passes an edge of the cleat the height is C1 but not C2: no difference there
+    kinks = np.array([xc - 0.5 * length, xc + 0.5 * length, xc + width - 0.5 * length, xc + width + 0.5 * length])
+    xs = [x for x in np.linspace(kinks.min() - 0.05, kinks.max() + 0.05, 57) if np.abs(x - kinks).min() > 1e-4]
+    bumps = 0
+    for x in xs:
+        cleat, slope = law.footprint_cleat(x, length, xc, height, width, True)
+        assert abs(cleat - _parabolic_cleat_by_quadrature(x, length, xc, height, width)) <= 1e-9, x
+        by_difference = (_parabolic_cleat_by_quadrature(x + h, length, xc, height, width)
+                         - _parabolic_cleat_by_quadrature(x - h, length, xc, height, width)) / (2.0 * h)
+        assert abs(slope - by_difference) <= 1e-9, x
+        # the law's three forms (mapping, force callback, flat vector) run the same branch, bit for bit
+        f, _, dd, _, road = law.extended_tire(0.74, 0.0, x, speed, 0.0, 0.0, p)
+        assert (road, dd) == (cleat, slope * speed)
+        assert law.tire_force(0.74, 0.0, x, speed, 0.0, 0.0, q) == f == force_fn(0.74, 0.0, x, speed, 0.0, 0.0)
+        bumps += 0.0 < cleat < height and slope != 0.0
+    assert bumps >= 20
+    # the pressure is normalised: uniform and parabolic footprints spread the same cleat area H w along x
+    for parabolic in (False, True):
+        area, _ = quad(lambda x: law.footprint_cleat(x, length, xc, height, width, parabolic)[0],
+                       kinks.min(), kinks.max(), points=kinks[1:3], epsabs=1e-14, limit=200)
+        assert area == pytest.approx(height * width, rel=1e-9), parabolic
+
+
+def test_parabolic_footprint_in_the_fmu(slave, vr):
+    s, _ = slave
+    s.setReal([vr[n] for n in CLEAT], list(CLEAT.values()))
+    s.setBoolean([vr["parabolic_pressure"]], [True])
+    road_z, speed = 0.012, 2.0
+    for hub_x in (0.3, 0.36, 0.4, 0.45, 0.5, 0.55, 0.6, 0.7, 0.74, 0.8):
+        s.setReal([vr[n] for n in INPUTS], [0.74, 0.0, road_z, 0.0, hub_x, speed])
+        road, rate = s.getReal([vr["road_effective_z"], vr["deflection_rate"]])
+        expected = _parabolic_cleat_by_quadrature(hub_x, CLEAT["footprint_length"], CLEAT["cleat_x"],
+                                                  CLEAT["cleat_height"], CLEAT["cleat_width"])
+        assert road - road_z == pytest.approx(expected, rel=1e-9, abs=1e-12)
+        cleat, slope = law.footprint_cleat(hub_x, *CLEAT.values(), True)
+        assert (road, rate) == (road_z + cleat, slope * speed)
+    s.setBoolean([vr["parabolic_pressure"]], [False])  # back to the uniform footprint (plateau H w / l)
+    s.setReal([vr["hub_x"]], [0.55])
+    assert s.getReal([vr["road_effective_z"]])[0] - road_z == pytest.approx(0.05 * 0.1 / 0.3, rel=1e-12)
 
 
 def test_without_footprint_the_cleat_is_felt_under_the_contact_point_only(slave, vr):
@@ -180,14 +258,15 @@ def test_compliance_units_descriptions_and_experiment(fmu):
     root = model_description(fmu)
     units = {u.get("name") for u in root.find("UnitDefinitions")}
     variables = {sv.get("name"): sv for sv in root.iter("ScalarVariable")}
-    assert set(variables) == set(EXPECTED_UNITS) | {"unilateral", "in_contact"}
+    assert set(variables) == set(EXPECTED_UNITS) | {"unilateral", "parabolic_pressure", "in_contact"}
     for name, sv in variables.items():
         assert sv.get("description"), name
         if name in EXPECTED_UNITS:
             assert sv.find("Real").get("unit") == EXPECTED_UNITS[name] and EXPECTED_UNITS[name] in units
-    unilateral = variables["unilateral"]
-    assert (unilateral.get("causality"), unilateral.get("variability"), unilateral.find("Boolean").get("start")) \
-        == ("parameter", "tunable", "false")
+    for name in BOOL_PARAMS:
+        flag = variables[name]
+        assert (flag.get("causality"), flag.get("variability"), flag.find("Boolean").get("start")) \
+            == ("parameter", "tunable", "false"), name
     de = root.find("DefaultExperiment")
     assert (float(de.get("startTime")), float(de.get("stopTime")), float(de.get("stepSize"))) == (0.0, 0.6, 0.001)
     cs = root.find("CoSimulation")
@@ -233,7 +312,8 @@ def test_build_writes_every_start_value_including_the_boolean_and_the_descriptio
     starts = {"stiffness": 312345.6789012345, "damping": 1234.5, "unloaded_radius": 0.8, "footprint_length": 0.25,
               "cleat_x": -0.3, "cleat_height": 0.04, "cleat_width": 0.08, "unilateral": True,
               "stiffness_exponent": 1.25, "static_load": 12000.0, "friction_force": 300.0,
-              "friction_velocity": 0.02, "lug_amplitude": 0.003, "lug_pitch": 0.3, "lug_phase": 0.7}
+              "friction_velocity": 0.02, "lug_amplitude": 0.003, "lug_pitch": 0.3, "lug_phase": 0.7,
+              "parabolic_pressure": True}
     fmu = build_fmu(KIND, tmp_path / "FL.fmu", start_values=starts, description="front left, test day 3")
     root = model_description(fmu)
     assert root.get("description") == "front left, test day 3"
@@ -247,14 +327,15 @@ def test_build_writes_every_start_value_including_the_boolean_and_the_descriptio
     s = open_fmpy_slave(fmu)
     try:
         assert s.getReal([vr[n] for n in REAL_PARAMS]) == [starts[n] for n in REAL_PARAMS]
-        assert s.getBoolean([vr["unilateral"]]) == [1]
+        assert s.getBoolean([vr[n] for n in BOOL_PARAMS]) == [1, 1]
         assert s.getReal([vr["hub_z"]]) == [0.8]
     finally:
         s.freeInstance()
 
 
 @pytest.mark.parametrize("starts, match", [
-    ({"unilateral": 1}, "True or False"), ({"stiffness_exponent": True}, "finite number"),
+    ({"unilateral": 1}, "True or False"), ({"parabolic_pressure": 0.0}, "True or False"),
+    ({"stiffness_exponent": True}, "finite number"),
     ({"lug_phase": math.nan}, "finite"), ({"stiffness_exponent": 1.4}, "static_load must be > 0"),
     ({"cleat_width": 0.0}, "cleat_width must be > 0"),
 ])

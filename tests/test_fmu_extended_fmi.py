@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from extended_tire_cases import (INPUTS, KIND, OPTION_SETS, OUTPUTS, REAL_OUTPUTS, REAL_PARAMS, law_outputs,
-                                 random_inputs, random_parameters, read_outputs, set_parameters)
+from extended_tire_cases import (BOOL_PARAMS, INPUTS, KIND, OPTION_SETS, OUTPUTS, REAL_OUTPUTS, REAL_PARAMS,
+                                 law_outputs, random_inputs, random_parameters, read_outputs, set_parameters)
 from fmu_helpers import (LEAK_LIMIT, assert_fmpy_matches_the_reference, assert_host_survives_errors,
                          assert_instantiate_free_cycles_leak_at_most_1_mb_and_keep_sys_path,
                          assert_libcosim_matches_fmpy, assert_state_round_trip, assert_value_rejected, kind_fixtures,
@@ -34,10 +34,10 @@ def test_default_experiment_with_fmpy_and_libcosimpy_matches_the_reference(fmu):
 
 def test_two_fmus_of_the_kind_keep_their_own_parameters(fmu, tmp_path, vr):
     other_p = {**law.EXTENDED_DEFAULTS, "stiffness": 123456.0, "unilateral": True, "footprint_length": 0.2,
-               "cleat_x": 0.1, "cleat_height": 0.03}
+               "cleat_x": 0.1, "cleat_height": 0.03, "parabolic_pressure": True}
     other = build_fmu(KIND, tmp_path / "FR.fmu", start_values={n: other_p[n] for n in
                                                                ("stiffness", "unilateral", "footprint_length",
-                                                                "cleat_x", "cleat_height")})
+                                                                "cleat_x", "cleat_height", "parabolic_pressure")})
     a, b = open_fmpy_slave(fmu, instance_name="a"), open_fmpy_slave(other, instance_name="b")
     try:
         u = [0.76, -0.1, 0.0, 0.0, 0.15, 2.0]
@@ -46,10 +46,25 @@ def test_two_fmus_of_the_kind_keep_their_own_parameters(fmu, tmp_path, vr):
         assert read_outputs(a, vr) == law_outputs(u, law.EXTENDED_DEFAULTS)  # bilateral: pulls
         assert read_outputs(b, vr) == law_outputs(u, other_p)
         assert read_outputs(a, vr)[0] < 0 and read_outputs(b, vr)[-1] is True
-        assert a.getBoolean([vr["unilateral"]]) == [0] and b.getBoolean([vr["unilateral"]]) == [1]
+        assert a.getBoolean([vr[n] for n in BOOL_PARAMS]) == [0, 0]
+        assert b.getBoolean([vr[n] for n in BOOL_PARAMS]) == [1, 1]
     finally:
         a.freeInstance()
         b.freeInstance()
+
+
+def test_the_co_simulation_master_reads_and_sets_both_booleans(tmp_path):
+    from identification.cosim import TireFmu
+
+    fmu = build_fmu(KIND, tmp_path / "RL.fmu", start_values={"parabolic_pressure": True, "footprint_length": 0.3})
+    with TireFmu(fmu) as tire:
+        tire.initialize(0.0)
+        params = tire.parameters()
+        assert {n: params[n] for n in BOOL_PARAMS} == {"unilateral": False, "parabolic_pressure": True}
+        assert all(type(params[n]) is float for n in REAL_PARAMS)
+    with TireFmu(fmu, start_values={"unilateral": True, "parabolic_pressure": False}) as tire:
+        tire.initialize(0.0)
+        assert {n: tire.parameters()[n] for n in BOOL_PARAMS} == {"unilateral": True, "parabolic_pressure": False}
 
 
 # -- FMU state and reset ------------------------------------------------------------------------
@@ -66,8 +81,8 @@ def test_state_round_trip_is_bit_identical_and_carries_the_parameters(fmu, vr):
     def restored(s):
         assert s.getReal([vr[n] for n in INPUTS]) == inputs[0]
 
-    def copied(t):  # t started with the default (bilateral, linear) parameters
-        assert t.getBoolean([vr["unilateral"]]) == [1]
+    def copied(t):  # t started with the default (bilateral, uniform footprint, linear) parameters
+        assert t.getBoolean([vr[n] for n in BOOL_PARAMS]) == [1, 1]
 
     first = assert_state_round_trip(fmu, prepare, lambda s: run_steps(s, vr, INPUTS, inputs,
                                                                       lambda s: read_outputs(s, vr)),
@@ -77,15 +92,18 @@ def test_state_round_trip_is_bit_identical_and_carries_the_parameters(fmu, vr):
 
 def test_reset_returns_to_the_start_values(slave, vr):
     s, _ = slave
-    names = INPUTS + REAL_PARAMS
-    before = s.getReal([vr[n] for n in names + REAL_OUTPUTS]), s.getBoolean([vr["unilateral"], vr["in_contact"]])
+    reals, flags = INPUTS + REAL_PARAMS + REAL_OUTPUTS, BOOL_PARAMS + ["in_contact"]
+
+    def values():
+        return s.getReal([vr[n] for n in reals]), s.getBoolean([vr[n] for n in flags])
+
+    before = values()
+    assert before[1][:2] == [0, 0]
     set_parameters(s, vr, random_parameters(np.random.default_rng(1), OPTION_SETS[-1]))
     s.setReal([vr[n] for n in INPUTS], [0.6, 1.0, 0.1, -1.0, 0.3, 2.0])
-    assert (s.getReal([vr[n] for n in names + REAL_OUTPUTS]),
-            s.getBoolean([vr["unilateral"], vr["in_contact"]])) != before
+    assert values() != before and values()[1][:2] == [1, 1]
     s.reset()
-    assert (s.getReal([vr[n] for n in names + REAL_OUTPUTS]), s.getBoolean([vr["unilateral"], vr["in_contact"]])) \
-        == before
+    assert values() == before
     reinitialise_and_step(s)
 
 

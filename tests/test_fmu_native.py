@@ -61,7 +61,8 @@ def test_progressive_tire_starts_at_its_equilibrium_off_the_built_in_cleat(tmp_p
 
 
 def _draw_extended(rng):
-    """Random parameters (each option on or off) and inputs near the built-in cleat."""
+    """Random parameters (each option on or off, the footprint's pressure uniform or parabolic) and inputs
+    near the built-in cleat."""
     on = rng.random(6) < 0.6
     p = {"stiffness": rng.uniform(1e5, 1e6), "damping": rng.uniform(0.0, 8e3), "unloaded_radius": rng.uniform(0.4, 1.0),
          "footprint_length": rng.uniform(0.05, 0.5) if on[0] else 0.0, "cleat_x": rng.uniform(-0.5, 0.5),
@@ -69,7 +70,8 @@ def _draw_extended(rng):
          "unilateral": bool(on[2]), "stiffness_exponent": rng.uniform(0.6, 2.5) if on[3] else 1.0,
          "static_load": rng.uniform(5e3, 3e4), "friction_force": rng.uniform(0.0, 800.0) if on[4] else 0.0,
          "friction_velocity": rng.uniform(1e-3, 0.1), "lug_amplitude": rng.uniform(-3e-3, 3e-3) if on[5] else 0.0,
-         "lug_pitch": rng.uniform(0.1, 0.5), "lug_phase": rng.uniform(-4.0, 4.0)}
+         "lug_pitch": rng.uniform(0.1, 0.5), "lug_phase": rng.uniform(-4.0, 4.0),
+         "parabolic_pressure": bool(rng.random() < 0.5)}
     deflection = p["stiffness_exponent"] * p["static_load"] / p["stiffness"]
     u = {"hub_z": p["unloaded_radius"] - deflection + rng.uniform(-0.08, 0.08), "hub_vz": rng.normal(0, 0.5),
          "road_z": rng.uniform(-0.02, 0.02), "road_vz": rng.normal(0, 0.3),
@@ -84,16 +86,17 @@ def _agree(got, want, what):
 def test_c_law_agrees_with_the_python_law_on_random_inputs_over_every_option(native_fmus):
     fmu = native_fmus["extended_tire"]
     refs = variable_refs(fmu)
-    real_params = [n for n in tire_law.EXTENDED_DEFAULTS if n != "unilateral"]
+    flags = ["unilateral", "parabolic_pressure"]
+    real_params = [n for n in tire_law.EXTENDED_DEFAULTS if n not in flags]
     outputs = ["force_z", "deflection", "deflection_rate", "road_effective_z"]
     rng = np.random.default_rng(20261123)
     s = open_fmpy_slave(fmu)
-    seen_contact = set()
+    seen_contact, footprints = set(), {False: 0, True: 0}
     try:
         for i in range(3000):
             p, u = _draw_extended(rng)
             s.setReal([refs[n][0] for n in real_params], [p[n] for n in real_params])
-            s.setBoolean([refs["unilateral"][0]], [p["unilateral"]])
+            s.setBoolean([refs[n][0] for n in flags], [p[n] for n in flags])
             s.setReal([refs[n][0] for n in u], list(u.values()))
             got = s.getReal([refs[n][0] for n in outputs])
             contact = s.getBoolean([refs["in_contact"][0]])[0]
@@ -103,10 +106,56 @@ def test_c_law_agrees_with_the_python_law_on_random_inputs_over_every_option(nat
                 _agree(a, b, f"draw {i}: {name}")
             assert bool(contact) == bool(c), f"draw {i}"
             seen_contact.add((p["unilateral"], bool(c)))
+            cleat, slope = tire_law.footprint_cleat(u["hub_x"], p["footprint_length"], p["cleat_x"],
+                                                    p["cleat_height"], p["cleat_width"], p["parabolic_pressure"])
+            if p["footprint_length"] > 0.0 and cleat > 0.0 and slope != 0.0:  # the cleat partly in the footprint
+                footprints[p["parabolic_pressure"]] += 1
         s.terminate()
     finally:
         s.freeInstance()
     assert seen_contact == {(False, False), (False, True), (True, False), (True, True)}
+    assert min(footprints.values()) >= 100, footprints  # both footprint pressures on the cleat's ramps
+
+
+def test_parabolic_footprint_step_run_reproduces_the_python_law_in_both_backends(native_fmus, tmp_path):
+    """The reference experiment (every option on) with a parabolic footprint pressure, stepped by fmpy: the
+    native FMU (built with the option, or switched to it before initialization) and the pythonfmu FMU give
+    the Python law's outputs for the inputs held over each step, and the independent closed form's."""
+    from build_scripts.reference import closed_form_outputs
+    from build_scripts.runners import simulate_fmpy
+
+    kind = load_kind("extended_tire")
+    inputs, outputs = kind.names("input"), kind.names("output")
+    starts = {**kind.reference_start_values, "parabolic_pressure": True}
+    p = {**tire_law.EXTENDED_DEFAULTS, **starts}
+    ref = read_reference("extended_tire")
+    signals = {n: ref[n] for n in ["time", *inputs]}
+    held = {n: np.concatenate([signals[n][:1], signals[n][:-1]]) for n in inputs}  # fmpy's alignment
+    rows = [tire_law.extended_tire(*(float(held[n][k]) for n in ("hub_z", "hub_vz", "hub_x", "hub_vx", "road_z",
+                                                                 "road_vz")), p) for k in range(ref["time"].size)]
+    law = {name: np.array([row[j] for row in rows]) for j, name in
+           enumerate(("force_z", "deflection", "deflection_rate", "in_contact", "road_effective_z"))}
+    closed = closed_form_outputs("extended_tire", signals, p)
+    # the option matters in this run: another road under the tire, another force than the reference's
+    assert np.abs(law["road_effective_z"] - ref["road_effective_z"]).max() > 1e-3
+    assert np.abs(law["force_z"] - ref["force_z"]).max() > 1000.0
+    runs = {"native built with the option": (build_fmu("extended_tire", tmp_path / "native.fmu", backend="native",
+                                                       start_values=starts, platforms=["linux64"]), None),
+            "native switched before initialization": (native_fmus["extended_tire"], starts),
+            "pythonfmu built with the option": (build_fmu("extended_tire", tmp_path / "py.fmu", start_values=starts),
+                                                None)}
+    for label, (fmu, start_values) in runs.items():
+        sim = simulate_fmpy(fmu, signals, outputs, start_values=start_values)
+        for name in outputs:
+            if name == "in_contact":
+                assert np.array_equal(sim[name], law[name]) and np.array_equal(sim[name], closed[name]), label
+                continue
+            if label.startswith("pythonfmu"):  # the very same law code
+                assert np.array_equal(sim[name], law[name]), (label, name)
+            else:
+                np.testing.assert_allclose(sim[name], law[name], rtol=1e-12, atol=0.0, err_msg=f"{label}: {name}")
+            np.testing.assert_allclose(sim[name], closed[name], rtol=kind.reference_rtol, atol=kind.reference_atol,
+                                       err_msg=f"{label}: {name} (closed form)")
 
 
 def test_c_point_contact_agrees_with_the_python_law(native_fmus):

@@ -4,9 +4,10 @@ A force element between road and hub in absolute coordinates (SI units, z
 upwards, x along the travel): the point-contact spring k parallel to damper c,
 with the options of ``identification/tire_law.py`` (:func:`extended_tire`),
 each a tunable parameter whose default switches it off — a built-in
-rectangular cleat enveloped by a uniform footprint, road-equivalent lugs,
-progressive stiffness, regularised Coulomb friction and unilateral contact.
-With every option at its default the force is the point-contact tire's.
+rectangular cleat enveloped by a footprint (uniform contact pressure, or
+parabolic with ``parabolic_pressure``), road-equivalent lugs, progressive
+stiffness, regularised Coulomb friction and unilateral contact.  With every
+option at its default the force is the point-contact tire's.
 
 Runtime contract (this file runs inside the FMU, on the importing machine):
 
@@ -43,7 +44,9 @@ STATE_FORMAT = "cleatfmu_extended_tire/1"
 #: ``cleatfmu_extended_tire_table`` (read its docstring); the parameters'
 #: starts are ``tire_law.EXTENDED_DEFAULTS``.  The build reads this literal,
 #: without importing this file, to write units, descriptions and the model
-#: structure.
+#: structure.  A new variable is appended (as ``parabolic_pressure`` was), so
+#: that the value references of the others never change; the native FMU's
+#: table (``fmu_src/native/extended_tire/config.h``) must list the same rows.
 VARIABLES = (
     ("hub_z", "Real", "input", "continuous", "m", "unloaded_radius", {},
      "Hub (wheel centre) height, absolute, m (z upwards); starts at the unloaded radius, "
@@ -65,8 +68,9 @@ VARIABLES = (
     ("unloaded_radius", "Real", "parameter", "tunable", "m", 0.75, {},
      "Unloaded tire radius r0, m (> 0)"),
     ("footprint_length", "Real", "parameter", "tunable", "m", 0.0, {},
-     "Length l of the uniform footprint over which the built-in cleat is averaged, m (>= 0; "
-     "0: the cleat is felt under the contact point only)"),
+     "Length l of the footprint over which the built-in cleat is averaged, m (>= 0; "
+     "0: the cleat is felt under the contact point only); contact pressure uniform, or parabolic "
+     "when parabolic_pressure"),
     ("cleat_x", "Real", "parameter", "tunable", "m", 0.0, {},
      "Longitudinal position of the built-in cleat's leading edge, m"),
     ("cleat_height", "Real", "parameter", "tunable", "m", 0.0, {},
@@ -98,18 +102,20 @@ VARIABLES = (
       "cleat_height": "dependent", "cleat_width": "dependent", "unilateral": "dependent",
       "stiffness_exponent": "dependent", "static_load": "dependent", "friction_force": "dependent",
       "friction_velocity": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent",
-      "lug_phase": "dependent"},
+      "lug_phase": "dependent", "parabolic_pressure": "dependent"},
      "Vertical tire force on the hub, N, compressive positive (pushes the hub up): elastic force + "
      "damping*deflection_rate + friction; 0 N when unilateral and not in_contact"),
     ("deflection", "Real", "output", "continuous", "m", None,
      {"hub_z": "constant", "road_z": "constant", "hub_x": "dependent", "unloaded_radius": "constant",
       "footprint_length": "dependent", "cleat_x": "dependent", "cleat_height": "dependent",
-      "cleat_width": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent", "lug_phase": "dependent"},
+      "cleat_width": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent", "lug_phase": "dependent",
+      "parabolic_pressure": "dependent"},
      "Tire deflection unloaded_radius - (hub_z - road_effective_z), m (positive = compressed)"),
     ("deflection_rate", "Real", "output", "continuous", "m/s", None,
      {"hub_vz": "constant", "road_vz": "constant", "hub_x": "dependent", "hub_vx": "dependent",
       "footprint_length": "dependent", "cleat_x": "dependent", "cleat_height": "dependent",
-      "cleat_width": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent", "lug_phase": "dependent"},
+      "cleat_width": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent", "lug_phase": "dependent",
+      "parabolic_pressure": "dependent"},
      "Deflection rate road_vz + (slope of cleat and lugs along x)*hub_vx - hub_vz, m/s (positive = compressing)"),
     ("in_contact", "Boolean", "output", "discrete", "", None,
      {"hub_z": "dependent", "hub_vz": "dependent", "road_z": "dependent", "road_vz": "dependent",
@@ -118,13 +124,18 @@ VARIABLES = (
       "cleat_height": "dependent", "cleat_width": "dependent", "unilateral": "dependent",
       "stiffness_exponent": "dependent", "static_load": "dependent", "friction_force": "dependent",
       "friction_velocity": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent",
-      "lug_phase": "dependent"},
+      "lug_phase": "dependent", "parabolic_pressure": "dependent"},
      "Contact flag, dimensionless: deflection > 0 m, and when unilateral also force_z > 0 N"),
     ("road_effective_z", "Real", "output", "continuous", "m", None,
      {"road_z": "constant", "hub_x": "dependent", "footprint_length": "dependent", "cleat_x": "dependent",
       "cleat_height": "dependent", "cleat_width": "dependent", "lug_amplitude": "dependent",
-      "lug_pitch": "dependent", "lug_phase": "dependent"},
+      "lug_pitch": "dependent", "lug_phase": "dependent", "parabolic_pressure": "dependent"},
      "Effective road height the tire feels, m: road_z + built-in cleat averaged over the footprint + lugs"),
+    ("parabolic_pressure", "Boolean", "parameter", "tunable", "", False, {},
+     "Parabolic footprint pressure, dimensionless: when true the built-in cleat is averaged over the footprint "
+     "weighted by a contact pressure proportional to 1 - (2*xi/footprint_length)^2 (xi: distance from the "
+     "footprint's centre), zero at the footprint's ends; when false the pressure is uniform (no effect when "
+     "footprint_length = 0 m)"),
 )
 
 _VR = {row[0]: vr for vr, row in enumerate(VARIABLES)}

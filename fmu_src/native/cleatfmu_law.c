@@ -17,15 +17,29 @@ void cleatfmu_point_contact(double hub_z, double hub_vz, double road_z, double r
     out->road = road_z;
 }
 
-/* Built-in cleat seen at x: height and slope dr/dx (tire_law.footprint_cleat). */
-static void footprint_cleat(double x, double footprint, double xc, double h, double w,
+/* Python's min(1.0, max(-1.0, u)). */
+static double clip_unit(double u) {
+    u = (u > -1.0) ? u : -1.0;
+    return (u < 1.0) ? u : 1.0;
+}
+
+/* Built-in cleat seen at x: height and slope dr/dx (tire_law.footprint_cleat); the
+ * footprint's contact pressure is uniform, or parabolic when `parabolic` is nonzero. */
+static void footprint_cleat(double x, double footprint, double xc, double h, double w, int parabolic,
                             double *height, double *slope) {
-    double lo, hi, left, right;
+    double lo, hi, left, right, u0, u1;
     *height = 0.0;
     *slope = 0.0;
     if (h == 0.0) return;
     if (footprint <= 0.0) {
         *height = (xc <= x && x < xc + w) ? h : 0.0;
+        return;
+    }
+    if (parabolic) {
+        u1 = clip_unit(2.0 * (xc + w - x) / footprint);
+        u0 = clip_unit(2.0 * (xc - x) / footprint);
+        *height = 0.75 * h * ((u1 - u1 * u1 * u1 / 3.0) - (u0 - u0 * u0 * u0 / 3.0));
+        *slope = 1.5 * h / footprint * (u1 * u1 - u0 * u0);
         return;
     }
     lo = x - 0.5 * footprint;
@@ -62,7 +76,8 @@ void cleatfmu_extended_tire(double hub_z, double hub_vz, double hub_x, double hu
                             CleatfmuTireResult *out) {
     double cleat, cleat_slope, lug, lug_slope, road, d, dd, f;
     int contact;
-    footprint_cleat(hub_x, p->footprint_length, p->cleat_x, p->cleat_height, p->cleat_width, &cleat, &cleat_slope);
+    footprint_cleat(hub_x, p->footprint_length, p->cleat_x, p->cleat_height, p->cleat_width,
+                    p->parabolic_pressure, &cleat, &cleat_slope);
     lug_road(hub_x, p->lug_amplitude, p->lug_pitch, p->lug_phase, &lug, &lug_slope);
     road = road_z + cleat + lug;
     d = p->unloaded_radius - (hub_z - road);

@@ -83,6 +83,7 @@ int cleatfmu_evaluate(double *v, char *msg, size_t n) {
     p.lug_amplitude = v[VR_LUG_AMPLITUDE];
     p.lug_pitch = v[VR_LUG_PITCH];
     p.lug_phase = v[VR_LUG_PHASE];
+    p.parabolic_pressure = v[VR_PARABOLIC_PRESSURE] != 0.0;
     cleatfmu_extended_tire(v[VR_HUB_Z], v[VR_HUB_VZ], v[VR_HUB_X], v[VR_HUB_VX], v[VR_ROAD_Z], v[VR_ROAD_VZ],
                            &p, &r);
     v[VR_ROAD_EFFECTIVE_Z] = r.road;

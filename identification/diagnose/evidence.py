@@ -6,7 +6,7 @@ at the impact, say).  Each effect is therefore also required to show itself
 the way physics says it must:
 
 ``enveloping``
-    an equivalent uniform footprint of at least 0.1 m (a tractor tire's is
+    a footprint (parabolic contact pressure) of at least 0.1 m (a tractor tire's is
     0.25-0.5 m), its 95 % interval above 0.05 m;
 ``lift_off``
     the fitted unilateral model loses contact for at least 15 ms, and there
@@ -99,7 +99,7 @@ def _enveloping(fit, base, pb):
     impact = (t >= start) & (t <= start + duration + 0.05)
     meas_peak = float(np.max(np.abs(pb.measured[impact]))) if impact.any() else float("nan")
     point_peak = float(np.max(np.abs(base.prediction[impact]))) if impact.any() else float("nan")
-    text = (f"equivalent uniform footprint {_fmt_ci(fit, 'footprint', '.3f', 'm')}: the cleat is felt for "
+    text = (f"footprint (parabolic contact pressure) {_fmt_ci(fit, 'footprint', '.3f', 'm')}: the cleat is felt for "
             f"(footprint + width) / speed = {duration * 1e3:.0f} ms from t = {start:.3f} s, the impact peaks at "
             f"{meas_peak:.1f} m/s^2 where point contact predicts {point_peak:.1f} m/s^2")
     return ell >= 0.1 and lo >= 0.05, text

@@ -1,8 +1,10 @@
 """Extended tire FMUs from a diagnosis, and the gain measured by co-simulating them with fmpy.
 
 The final model's tire-side effects become parameters of the extended tire
-FMU (``fmu_src/extended_tire``): footprint and built-in cleat, unilateral
-contact, stiffness exponent with its static load, friction, lugs.  With
+FMU (``fmu_src/extended_tire``): footprint (with its contact-pressure shape,
+the Boolean ``parabolic_pressure``) and built-in cleat, unilateral contact,
+stiffness exponent with its static load, friction, lugs - every entry of the
+law's parameter dict, Booleans included, is a start value of the FMU.  With
 ``axle_coupling`` the other axle's tire gets its own FMU and both run as two
 instances under the half-tractor master.  The co-simulation uses the fitting
 model's grid, so that the fitting model and the FMU run compute the same

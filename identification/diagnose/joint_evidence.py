@@ -86,7 +86,7 @@ def _enveloping(fit, base):
     parts = [f"{n.split('_')[1]} {_ci(fit, n, '.3f', 'm')}" for n in names]
     width = fit.model.problem.rec.cleat_width_m
     span = ", ".join(f"{(fit.params[n] + width) / v * 1e3:.0f} ms {n.split('_')[1]}" for n in names)
-    return ok, (f"equivalent uniform footprint {'; '.join(parts)}: the cleat is felt for (footprint + width) / "
+    return ok, (f"footprint (parabolic contact pressure) {'; '.join(parts)}: the cleat is felt for (footprint + width) / "
                 f"speed = {span}, never as a step")
 
 

@@ -135,6 +135,7 @@ class TractorDiagnosis:
                          "speed_m_s": {"sidecar": float(rec.speed_m_s),
                                        "from_delay": float(rec.wheelbase_m / delay) if delay else None}},
                 "tires": tires, "evidence": dict(self.evidence),
+                "acquisition": rec.acquisition.to_json() if rec.acquisition is not None else None,
                 "intervals": "conditional on the model: it leaves a residual above the noise floor"
                              if self.conditional else "the model explains the data to within noise"}
 

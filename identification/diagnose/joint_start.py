@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from .. import tire_law
+from ..acquisition import sensed_acceleration
 from ..errors import InputError
 from ..identify import identify_paper
 from ..model import Body, Cleat, TractorModel
@@ -65,7 +66,8 @@ def _corner(pb: TractorProblem, tire: str, k: float, c: float, arrival: float, f
                        _SCAN_STEP_S)
     traj = run_model(record, *grid)
     fs = rec.sample_rate_hz
-    return lowpass(traj.mean_acceleration(0, rec.time_s, 1.0 / fs), sample_rate_hz=fs, cutoff_hz=pb.cutoff_hz)
+    return lowpass(sensed_acceleration(traj, 0, rec.time_s, fs, rec.acquisition), sample_rate_hz=fs,
+                   cutoff_hz=pb.cutoff_hz)
 
 
 def arrival_scan(pb: TractorProblem, tire: str, k: float, c: float, footprint_m: float = 0.0) -> float:

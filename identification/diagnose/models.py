@@ -7,7 +7,8 @@ the FMU built from its parameters compute the same numbers.  A model is the
 baseline plus a set of effects:
 
 ``enveloping``
-    the built-in cleat averaged over a uniform footprint of length ℓ
+    the built-in cleat averaged over a footprint of length ℓ under a parabolic
+    contact pressure
     (parameter ``footprint``, m), instead of a step under the contact point;
 ``lift_off``
     unilateral contact: the tire never pulls (no parameter; its evidence is
@@ -54,7 +55,7 @@ PARAMETERS = {
     "k": ("N/m", "tire stiffness (tangent at the static load)"),
     "c": ("N s/m", "tire viscous damping"),
     "arrival": ("s", "time the contact point reaches the cleat's leading edge"),
-    "footprint": ("m", "footprint length (uniform contact pressure)"),
+    "footprint": ("m", "footprint length (parabolic contact pressure)"),
     "exponent": ("-", "exponent n of the progressive elastic law"),
     "friction": ("N", "Coulomb friction force"),
     "lug_amplitude": ("m", "road-equivalent amplitude of the periodic excitation"),
@@ -138,7 +139,7 @@ def tire_law_parameters(rec: Recording, tire: str, effects, *, k: float, c: floa
     p.update(stiffness=k, damping=c, unloaded_radius=_UNLOADED_RADIUS_M, static_load=rec.wheel_load_N[tire],
              unilateral="lift_off" in effects)
     if "enveloping" in effects:
-        p.update(footprint_length=footprint, cleat_x=0.0, cleat_height=rec.cleat_height_m,
+        p.update(footprint_length=footprint, parabolic_pressure=True, cleat_x=0.0, cleat_height=rec.cleat_height_m,
                  cleat_width=rec.cleat_width_m)
     if "nonlinear_stiffness" in effects:
         p.update(stiffness_exponent=exponent)

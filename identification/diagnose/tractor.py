@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..acquisition import sensed_acceleration
 from ..errors import InputError
 from ..model import Body, Cleat, TractorModel
 from ..model.kernels import run_model
@@ -214,7 +215,7 @@ class TractorFitModel:
         pb, rec = self.problem, self.problem.rec
         traj = trajectory if trajectory is not None else self.simulate(theta, step_s=step_s)
         fs = rec.sample_rate_hz
-        return {t: lowpass(traj.mean_acceleration(i, rec.time_s, 1.0 / fs), sample_rate_hz=fs,
+        return {t: lowpass(sensed_acceleration(traj, i, rec.time_s, fs, rec.acquisition), sample_rate_hz=fs,
                            cutoff_hz=pb.cutoff_hz) for i, t in enumerate(pb.channels)}
 
     def bounds(self, start: dict) -> tuple[dict, dict]:

@@ -122,7 +122,31 @@ def _step(J, minv, zs, W, rz, rv, hx, hv, Q, q0, dq0, h, points):
     return Z, V, F, A, jumps
 
 
+def _drop_stale_cache() -> None:
+    """Drop the kernel's on-disk compilation when the tire law changed since it was cached.
+
+    numba keys a cached function on its own file only, so the kernel compiled
+    with an older :func:`identification.tire_law.tire_force` would be reused;
+    a marker named after a hash of the law's source tells the two apart.
+    """
+    import hashlib
+    import inspect
+    from pathlib import Path
+
+    try:
+        stamp = hashlib.sha256(inspect.getsource(tire_law).encode()).hexdigest()[:16]
+        cache = Path(__file__).with_name("__pycache__")
+        marker = cache / f"kernels.law-{stamp}"
+        if cache.is_dir() and not marker.exists():
+            for old in list(cache.glob("kernels._step-*.nb[ic]")) + list(cache.glob("kernels.law-*")):
+                old.unlink(missing_ok=True)
+            marker.touch()
+    except OSError:   # pragma: no cover - a read-only install keeps numba's own cache logic
+        pass
+
+
 if numba is not None:
+    _drop_stale_cache()
     _step = numba.njit(cache=True, fastmath=False)(_step)
 
 

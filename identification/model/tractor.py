@@ -310,7 +310,7 @@ class TractorModel:
         out = []
         for p, x0 in zip(self.laws, hub_x0):
             cleat, _ = tire_law.footprint_cleat(x0, p["footprint_length"], p["cleat_x"], p["cleat_height"],
-                                                p["cleat_width"])
+                                                p["cleat_width"], p["parabolic_pressure"])
             lug, _ = tire_law.lug_road(x0, p["lug_amplitude"], p["lug_pitch"], p["lug_phase"])
             deflection = p["stiffness_exponent"] * p["static_load"] / p["stiffness"]
             out.append(p["unloaded_radius"] + cleat + lug - deflection)

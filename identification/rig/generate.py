@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import InputError
 from .._files import atomic_write_texts
-from ..recording import Recording, format_recording
+from ..recording import Acquisition, Recording, format_recording
 from . import params as P
 from .road import RoadInput
 from .sensor import apply_chain, chain_modes
@@ -121,7 +121,9 @@ def run_rig(effects=(), overrides: dict | None = None, *, seed: int = 0) -> RigR
         time_s=time, accel_m_s2={c: y[TIRES.index(c)] for c in channels}, speed_m_s=speed,
         cleat_height_m=v["cleat.height_m"], cleat_width_m=v["cleat.width_m"], wheelbase_m=L,
         wheel_load_N={c: v[f"tire.{c}.load_N"] for c in channels},
-        description="virtual cleat-test rig recording", source="<rig>")
+        description="virtual cleat-test rig recording", source="<rig>",
+        acquisition=Acquisition(int(v["sensor.aa_order"]), float(aa_cut) if v["sensor.aa_order"] else 0.0,
+                                float(v["sensor.highpass_hz"])))
     truth = _truth(v, effects, seed, plant, road, traj, t_end)
     return RigRun(recording=rec, truth=truth, accel_true_m_s2=acc[:, pick])
 
