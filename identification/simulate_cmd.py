@@ -1,8 +1,15 @@
-"""``cleatfmu simulate TIRE.fmu REC.csv --tire FL``: the tire FMU against the measurement."""
+"""``cleatfmu simulate TIRE.fmu REC.csv --tire FL``: the tire FMU against the measurement.
+
+``cleatfmu simulate FL.fmu FR.fmu RL.fmu RR.fmu REC.csv --body DIAG.json`` (or
+``simulate DIR REC.csv --body DIAG.json``): the four tire FMUs under the
+diagnosed body against every channel
+(:func:`identification.tractor_cosim.simulate_tractor`).
+"""
 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 from .cliutil import check_output, choose_tire
 from .errors import InputError
@@ -28,41 +35,143 @@ def _text(cmp, rec) -> str:
     return "\n".join(lines)
 
 
+_KINDS = {"corners": "four independent corners", "sides": "one half-tractor per side (pitch)",
+          "axles": "one axle pair per axle (roll)", "rigid": "rigid tractor (heave, pitch, roll)",
+          "pivot": "rigid tractor with a pivoting front axle"}
+
+
+def _tractor_text(sim) -> str:
+    from .diagnose.tractor import TIRE_EFFECTS
+    from .tractor_cosim import UNEXPLAINED_RATIO
+
+    body, pb = sim.body, sim.problem
+    t = pb.rec.time_s[pb.window]
+    indices = ", ".join(f"{name.replace('_', ' ')} {body[name]:.3f}" for name in
+                        ("pitch_index", "roll_index", "pivot_index") if body[name] is not None)
+    lines = [f"{sim.recording}: four tire FMUs co-simulated under the body vs the measurement "
+             f"(both low-pass {pb.cutoff_hz:g} Hz; step {sim.step_s * 1e3:.4g} ms; window {t[0]:.3f}-{t[-1]:.3f} s)",
+             f"  body ({body['document']}): {_KINDS.get(body['kind'], body['kind'])}"
+             + (f"; {indices}" if indices else "")
+             + f"; tire effects {', '.join(e for e in body['effects'] if e in TIRE_EFFECTS) or 'none'}"]
+    diagnosed = body.get("diagnosed_recording")
+    if diagnosed and Path(str(diagnosed)).name != Path(sim.recording).name:
+        lines.append(f"  note: the body and arrivals were diagnosed from {diagnosed}, not from this recording")
+    lines.append("  tire  NRMSE  noise-only  residual/noise")
+    bad = []
+    for tire in sim.channels:
+        ratio = sim.residual_to_noise(tire)
+        verdict = "at the noise floor" if not sim.unexplained(tire) else \
+            f"NOT EXPLAINED: residual {ratio:.1f}x the noise (> {UNEXPLAINED_RATIO:g}x)"
+        if sim.unexplained(tire):
+            bad.append(tire)
+        lines.append(f"  {tire:<4}{sim.nrmse[tire]:7.2%}{sim.noise_nrmse[tire]:11.2%}{ratio:11.2f}   {verdict}  "
+                     f"[{sim.fmus[tire].name}]")
+    if bad:
+        lines.append(f"  the model does not explain the data in {', '.join(bad)}: the residual there is more than "
+                     f"{UNEXPLAINED_RATIO:g}x the noise")
+    else:
+        lines.append("  the model explains every channel to within the noise")
+    lines.append(f"  time: {sim.seconds:.1f} s")
+    return "\n".join(lines)
+
+
+def _plot_tractor(sim):
+    """Every channel: measured vs co-simulated (both low-passed) over the diagnosis window."""
+    from .plots import _limit_to, figure
+
+    pb = sim.problem
+    t, w = pb.rec.time_s, pb.window
+    n = len(pb.channels)
+    fig, axes = figure(n, 1, size=(10.0, 2.3 * n + 0.8), sharex=True, squeeze=False)
+    for ax, ch in zip(axes[:, 0], pb.channels):
+        ax.plot(t[w], pb.measured[ch][w], color="C0", lw=1.0, label=f"{ch} measured (low-pass)")
+        ax.plot(t[w], sim.predicted[ch][w], color="C3", lw=0.8,
+                label=f"FMU co-simulation, NRMSE {sim.nrmse[ch]:.1%} (noise {sim.noise_nrmse[ch]:.1%})")
+        ax.set_ylabel("m/s²")
+        _limit_to(ax, pb.measured[ch][w])
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[0, 0].set_title(f"{pb.rec.source}: four tire FMUs under the body ({sim.body['kind']})", fontsize=9)
+    axes[-1, 0].set_xlabel("time / s")
+    return fig
+
+
+def _save_plot(fig, path) -> None:
+    from .plots import save_png
+    try:
+        save_png(fig, path)
+    except OSError as exc:
+        raise InputError(path, f"cannot write: {exc.strerror or exc}") from None
+
+
+def _run_tractor(args) -> int:
+    from .recording import read_recording
+    from .tractor_cosim import simulate_tractor, tractor_fmu_paths
+
+    if args.tire is not None:
+        raise InputError("--tire", "the whole-tractor form compares all four channels; --tire is for one FMU")
+    if args.method is not None:
+        raise InputError("--method", "re-identification applies to one FMU, not to the whole-tractor form")
+    paths = tractor_fmu_paths(args.fmu)
+    if args.body is None:
+        raise InputError("--body", "the whole-tractor form (four FMUs or a directory) needs the body and the "
+                                   "arrivals: give --body DIAG.json, a 'cleatfmu diagnose REC.csv --json' document")
+    rec = read_recording(args.recording)
+    sim = simulate_tractor(paths, rec, args.body, cutoff_hz=args.cutoff_hz, step_s=args.max_step_s)
+    if args.plot is not None:
+        _save_plot(_plot_tractor(sim), args.plot)
+    print(json.dumps(sim.to_json(), indent=2) if args.json else _tractor_text(sim))
+    return 0
+
+
 def run(args) -> int:
     from .recording import read_recording
     from .validation import DEFAULT_MAX_STEP_S, simulate_recording
 
+    check_output(args.plot, ".png", "plot")
+    if args.max_step_s is not None and not args.max_step_s > 0:
+        raise InputError("--max-step-s", f"must be > 0, got {args.max_step_s}")
+    if len(args.fmu) > 1 or Path(args.fmu[0]).is_dir():
+        return _run_tractor(args)
+    if args.body is not None:
+        raise InputError("--body", "applies to the whole-tractor form (four FMUs or a directory), not to one FMU")
     rec = read_recording(args.recording)
     tire = choose_tire(rec, args.tire)
-    check_output(args.plot, ".png", "plot")
     step = args.max_step_s if args.max_step_s is not None else DEFAULT_MAX_STEP_S
-    if not step > 0:
-        raise InputError("--max-step-s", f"must be > 0, got {step}")
-    cmp = simulate_recording(args.fmu, rec, tire, cutoff_hz=args.cutoff_hz, max_step_s=step, method=args.method)
+    cmp = simulate_recording(args.fmu[0], rec, tire, cutoff_hz=args.cutoff_hz, max_step_s=step,
+                             method=args.method or "paper")
     if args.plot is not None:
-        from .plots import plot_comparison, save_png
-        try:
-            save_png(plot_comparison(cmp), args.plot)
-        except OSError as exc:
-            raise InputError(args.plot, f"cannot write: {exc.strerror or exc}") from None
+        from .plots import plot_comparison
+        _save_plot(plot_comparison(cmp), args.plot)
     print(json.dumps(cmp.to_json(), indent=2) if args.json else _text(cmp, rec))
     return 0
 
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
-        "simulate", help="co-simulate a tire FMU over a recording's cleat and compare with the measurement",
-        description="Run the tire FMU with fmpy under the corner mass W/g over the recording's cleat, sample the "
-                    "hub acceleration on the recording's time base, and report NRMSE, R2, re-identified k and c, "
-                    "decay rates and where (impact, free decay, other axle) the simulation is wrong.")
-    p.add_argument("fmu", metavar="TIRE.fmu")
+        "simulate", help="co-simulate a tire FMU (or all four under the body) over a recording's cleat and compare "
+                         "with the measurement",
+        description="One FMU: run the tire FMU with fmpy under the corner mass W/g over the recording's cleat, "
+                    "sample the hub acceleration on the recording's time base, and report NRMSE, R2, re-identified "
+                    "k and c, decay rates and where (impact, free decay, other axle) the simulation is wrong.  "
+                    "Four FMUs (FL FR RL RR, or a directory holding *_FL.fmu .. *_RR.fmu as 'diagnose --fmu-dir' "
+                    "writes them) with --body DIAG.json: run them under the body of a whole-tractor diagnosis "
+                    "('diagnose --json') and report, per channel, the NRMSE against the measurement, the noise-only "
+                    "NRMSE and their ratio.")
+    p.add_argument("fmu", metavar="FMU", nargs="+",
+                   help="one tire FMU, four (FL FR RL RR: matched by a _FL.fmu .. _RR.fmu suffix, else in that "
+                        "order), or one directory holding them")
     p.add_argument("recording", metavar="REC.csv")
-    p.add_argument("--tire", metavar="TIRE", help="channel to compare (required when the recording has several)")
+    p.add_argument("--tire", metavar="TIRE", help="one FMU: channel to compare (required when the recording has "
+                                                  "several)")
+    p.add_argument("--body", metavar="DIAG.json",
+                   help="four FMUs: the body and arrivals, a 'cleatfmu diagnose REC.csv --json' document")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
-    p.add_argument("--plot", metavar="OUT.png", help="write measured vs simulated acceleration with decay curves")
-    p.add_argument("--method", choices=("paper", "waveform"), default="paper",
-                   help="method to re-identify k and c from the simulated acceleration (default: %(default)s)")
+    p.add_argument("--plot", metavar="OUT.png", help="write measured vs simulated acceleration (one FMU: with "
+                                                     "decay curves; four: every channel)")
+    p.add_argument("--method", choices=("paper", "waveform"), default=None,
+                   help="one FMU: method to re-identify k and c from the simulated acceleration (default: paper)")
     p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ, help="low-pass cut-off, Hz")
     p.add_argument("--max-step-s", type=float, default=None, metavar="H",
-                   help="largest co-simulation step, s (default 2.5e-4)")
+                   help="largest co-simulation step, s (default 2.5e-4 for one FMU, 1e-3 for four, as diagnose)")
     p.set_defaults(func=run)

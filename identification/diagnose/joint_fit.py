@@ -135,7 +135,7 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
              for c in pb.channels}
     return TractorFit(model=model, params=params, ci=ci, sse=sse, nrmse=nrmse, prediction=pred,
                       evaluations=count[0], seconds=time.perf_counter() - t0,
-                      extra={"variance_inflation": infl, "in_bounds": in_bounds, "step_s": step_s or pb.step_s,
+                      extra={"variance_inflation": infl, "in_bounds": in_bounds, "step_s": step_s or model.default_step_s(),
                              "free": free, "covariance": cov, "logs": logs})
 
 

@@ -132,6 +132,7 @@ class TractorDiagnosis:
         return {"recording": rec.source, "effects": list(self.effects),
                 "body": {"pitch_index": value("pitch_index"), "roll_index": value("roll_index"),
                          "front_axle": "pivot" if "front_axle_pivot" in self.effects else "rigid",
+                         "pivot_index": value("pivot_index"),
                          "speed_m_s": {"sidecar": float(rec.speed_m_s),
                                        "from_delay": float(rec.wheelbase_m / delay) if delay else None}},
                 "tires": tires, "evidence": dict(self.evidence),
@@ -258,6 +259,10 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     finally:
         if pool:
             pool.shutdown()
+    if current.model.has_sharp_edges:   # the final fit with the cleat edges resolved for the anti-alias filter
+        tick(f"refit {current.label}, edges resolved")
+        fine = TractorFitModel(current.model.effects, pb, resolve_edges=True)
+        current = fit_tractor(fine, current.params, budget=FINAL_BUDGET)
     left = {c: unexplained(pb, current.prediction, c) for c in pb.channels}
     return TractorDiagnosis(problem=pb, effects=selected, baseline=baseline, final=current, rounds=rounds,
                             evidence=evidence, unexplained=left, seconds=time.perf_counter() - t0,

@@ -70,22 +70,27 @@ def _corner(pb: TractorProblem, tire: str, k: float, c: float, arrival: float, f
                    cutoff_hz=pb.cutoff_hz)
 
 
+def _impact_sse(pb: TractorProblem, tire: str, k: float, c: float, arrival_s: float, footprint_m: float) -> float:
+    """The corner's squared misfit around its impact at `arrival_s`, less the measurement's energy there."""
+    t = pb.rec.time_s
+    meas = pb.measured[tire]
+    lead = footprint_m / 2 / pb.rec.speed_m_s
+    sel = (t >= arrival_s - lead - 0.02) & (t <= arrival_s + lead + pb.rec.cleat_width_m / pb.rec.speed_m_s + 0.06)
+    pred = _corner(pb, tire, k, c, arrival_s, footprint_m)
+    return float(np.sum((pred[sel] - meas[sel]) ** 2) - np.sum(meas[sel] ** 2))   # gain over zero model
+
+
 def arrival_scan(pb: TractorProblem, tire: str, k: float, c: float, footprint_m: float = 0.0) -> float:
     """The channel's own cleat arrival (s): the corner's best fit near the channel's first burst.
 
     With `footprint_m` the corner envelops the cleat (its impact starts half a
     footprint before the arrival).
     """
-    t = pb.rec.time_s
-    meas = pb.measured[tire]
     onset = pb.onsets[tire]
     best, best_sse = onset, math.inf
     for shift in np.arange(-_SCAN_BEFORE_S, _SCAN_AFTER_S + 1e-9, _SCAN_STEP_S):
         arr = onset + shift + footprint_m / 2 / pb.rec.speed_m_s
-        lead = footprint_m / 2 / pb.rec.speed_m_s
-        sel = (t >= arr - lead - 0.02) & (t <= arr + lead + pb.rec.cleat_width_m / pb.rec.speed_m_s + 0.06)
-        pred = _corner(pb, tire, k, c, arr, footprint_m)
-        sse = float(np.sum((pred[sel] - meas[sel]) ** 2) - np.sum(meas[sel] ** 2))   # gain over zero model
+        sse = _impact_sse(pb, tire, k, c, arr, footprint_m)
         if sse < best_sse:
             best, best_sse = arr, sse
     return best
@@ -112,19 +117,49 @@ ENVELOPE_GUESS_M = 0.3
 
 
 def _timing(pb: TractorProblem, start: dict, footprint_m: float) -> dict:
+    """Arrival, stagger and delay from each channel's own arrival, robust to one misread channel.
+
+    Least squares over the channels' own arrivals (exact with three channels or
+    fewer).  A rigid body shows every wheel's impact in every channel, so one
+    channel's first burst may be another wheel's: with four channels each
+    leave-one-out solution is tried too, and among those with a stagger within
+    :data:`MAX_STAGGER_S` and a delay within 10 % of wheelbase / speed the
+    timing whose predicted arrivals the four corners fit best wins.
+    """
     rec = pb.rec
     own = {t: arrival_scan(pb, t, start[f"k_{t}"], start[f"c_{t}"], footprint_m) for t in pb.channels}
-    start = {}
-    # arrival, stagger and delay from the own arrivals, least squares (exact with three channels or fewer)
     names = ["arrival"] + (["stagger"] if pb.both_sides else []) + (["delay"] if pb.both_axles else [])
-    A = np.array([[1.0] + ([1.0 * (t in ("FR", "RR"))] if pb.both_sides else [])
-                  + ([1.0 * (t not in FRONT_TIRES)] if pb.both_axles else []) for t in pb.channels])
-    sol = np.linalg.lstsq(A, np.array([own[t] for t in pb.channels]), rcond=None)[0]
-    start.update(dict(zip(names, map(float, sol))))
+
+    def row(t):
+        return [1.0] + ([1.0 * (t in ("FR", "RR"))] if pb.both_sides else []) \
+            + ([1.0 * (t not in FRONT_TIRES)] if pb.both_axles else [])
+
+    def solve(tires):
+        sol = np.linalg.lstsq(np.array([row(t) for t in tires]), np.array([own[t] for t in tires]), rcond=None)[0]
+        out = dict(zip(names, map(float, sol)))
+        nominal = rec.rear_axle_delay_s()
+        if pb.both_axles and not 0.8 * nominal <= out["delay"] <= 1.2 * nominal:
+            out["delay"] = nominal
+        return out
+
+    options = [solve(pb.channels)]
+    if len(pb.channels) == 4:
+        options += [solve([t for t in pb.channels if t != left]) for left in pb.channels]
+
+    def score(timing):
+        return sum(_impact_sse(pb, t, start[f"k_{t}"], start[f"c_{t}"], float(np.dot(row(t), [timing[n] for n in names])),
+                               footprint_m) for t in pb.channels)
+
+    if len(options) == 1:
+        return options[0]
     nominal = rec.rear_axle_delay_s()
-    if pb.both_axles and not 0.8 * nominal <= start["delay"] <= 1.2 * nominal:
-        start["delay"] = nominal
-    return start
+    plausible = [o for o in options if abs(o.get("stagger", 0.0)) <= MAX_STAGGER_S
+                 and abs(o.get("delay", nominal) / nominal - 1) <= 0.1]
+    return min(plausible or options, key=score)
+
+
+#: Largest left/right cleat stagger a timing start may hold, s (placement error, not design).
+MAX_STAGGER_S = 0.25
 
 
 _MULTIPLIERS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.15, 1.3, 1.6)
