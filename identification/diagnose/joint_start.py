@@ -117,49 +117,19 @@ ENVELOPE_GUESS_M = 0.3
 
 
 def _timing(pb: TractorProblem, start: dict, footprint_m: float) -> dict:
-    """Arrival, stagger and delay from each channel's own arrival, robust to one misread channel.
-
-    Least squares over the channels' own arrivals (exact with three channels or
-    fewer).  A rigid body shows every wheel's impact in every channel, so one
-    channel's first burst may be another wheel's: with four channels each
-    leave-one-out solution is tried too, and among those with a stagger within
-    :data:`MAX_STAGGER_S` and a delay within 10 % of wheelbase / speed the
-    timing whose predicted arrivals the four corners fit best wins.
-    """
     rec = pb.rec
     own = {t: arrival_scan(pb, t, start[f"k_{t}"], start[f"c_{t}"], footprint_m) for t in pb.channels}
+    start = {}
+    # arrival, stagger and delay from the own arrivals, least squares (exact with three channels or fewer)
     names = ["arrival"] + (["stagger"] if pb.both_sides else []) + (["delay"] if pb.both_axles else [])
-
-    def row(t):
-        return [1.0] + ([1.0 * (t in ("FR", "RR"))] if pb.both_sides else []) \
-            + ([1.0 * (t not in FRONT_TIRES)] if pb.both_axles else [])
-
-    def solve(tires):
-        sol = np.linalg.lstsq(np.array([row(t) for t in tires]), np.array([own[t] for t in tires]), rcond=None)[0]
-        out = dict(zip(names, map(float, sol)))
-        nominal = rec.rear_axle_delay_s()
-        if pb.both_axles and not 0.8 * nominal <= out["delay"] <= 1.2 * nominal:
-            out["delay"] = nominal
-        return out
-
-    options = [solve(pb.channels)]
-    if len(pb.channels) == 4:
-        options += [solve([t for t in pb.channels if t != left]) for left in pb.channels]
-
-    def score(timing):
-        return sum(_impact_sse(pb, t, start[f"k_{t}"], start[f"c_{t}"], float(np.dot(row(t), [timing[n] for n in names])),
-                               footprint_m) for t in pb.channels)
-
-    if len(options) == 1:
-        return options[0]
+    A = np.array([[1.0] + ([1.0 * (t in ("FR", "RR"))] if pb.both_sides else [])
+                  + ([1.0 * (t not in FRONT_TIRES)] if pb.both_axles else []) for t in pb.channels])
+    sol = np.linalg.lstsq(A, np.array([own[t] for t in pb.channels]), rcond=None)[0]
+    start.update(dict(zip(names, map(float, sol))))
     nominal = rec.rear_axle_delay_s()
-    plausible = [o for o in options if abs(o.get("stagger", 0.0)) <= MAX_STAGGER_S
-                 and abs(o.get("delay", nominal) / nominal - 1) <= 0.1]
-    return min(plausible or options, key=score)
-
-
-#: Largest left/right cleat stagger a timing start may hold, s (placement error, not design).
-MAX_STAGGER_S = 0.25
+    if pb.both_axles and not 0.8 * nominal <= start["delay"] <= 1.2 * nominal:
+        start["delay"] = nominal
+    return start
 
 
 _MULTIPLIERS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.15, 1.3, 1.6)
