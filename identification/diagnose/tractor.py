@@ -216,7 +216,7 @@ class TractorFitModel:
         The scheme spreads a cleat edge over one step; seen through an
         anti-alias filter at f_aa that is an O(h) error until 2π f_aa h is
         small (0.4 rad: 0.25 ms at 250 Hz), enough to bias k and c by ~1e-4
-        and put the truth outside narrow intervals.  A footprint has no edges.
+        and move them out of their own narrow intervals.  A footprint has no edges.
         """
         pb, aa = self.problem, self.problem.rec.acquisition
         if not (self.resolve_edges and self.has_sharp_edges):
