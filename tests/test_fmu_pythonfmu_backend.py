@@ -30,7 +30,11 @@ def test_build_after_loading_a_pythonfmu_fmu_in_the_process_still_writes_binarie
             assert any(n.startswith("binaries/linux64/") for n in names), names
             s = open_fmpy_slave(out)
             s.terminate(); s.freeInstance()
-        print("ok")
+        print("ok", flush=True)
+        # Leave without interpreter teardown: after three pythonfmu FMUs were loaded and freed in one
+        # process, pythonfmu's own finalisation aborted in 2 of 36 runs ("corrupted double-linked list");
+        # this test checks the builds, which are done by now.
+        import os; os._exit(0)
     """)
     build_scripts.build_fmu("point_contact", tmp_path / "first.fmu")
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
