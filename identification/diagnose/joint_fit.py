@@ -26,7 +26,8 @@ from ..waveform import long_run_variance_ratio
 from .fit import _exp
 from .tractor import SIGNED, TractorFitModel
 
-__all__ = ["TractorFit", "fit_tractor", "sse_of", "unexplained", "UNEXPLAINED_RATIO"]
+__all__ = ["TractorFit", "fit_tractor", "sse_of", "unexplained", "sandwich_covariance", "correlation_lag",
+           "UNEXPLAINED_RATIO"]
 
 #: A channel whose residual RMS exceeds this multiple of its noise RMS holds unexplained signal.
 UNEXPLAINED_RATIO = 1.5
@@ -59,6 +60,60 @@ class TractorFit:
         """Σ over channels of SSE / noise²: the fit's objective."""
         pb = self.model.problem
         return float(sum(self.sse[c] / pb.noise[c] ** 2 for c in pb.channels))
+
+
+def correlation_lag(sample_rate_hz: float, cutoff_hz: float) -> int:
+    """Lags (samples) over which the low-passed noise is correlated: four periods of the cut-off."""
+    return max(10, int(math.ceil(4.0 * sample_rate_hz / cutoff_hz)))
+
+
+def sandwich_covariance(jac: np.ndarray, residual: np.ndarray, sizes, max_lag: int) -> np.ndarray:
+    """Covariance of least-squares estimates under serially correlated residuals (a HAC sandwich).
+
+    ``A⁻¹ M A⁻¹`` with ``A = JᵀJ`` and ``M = Σ_blocks Σ_h γ(h) Σ_i J_iᵀ J_{i+h}``:
+    each block of rows (a channel) has its own residual autocovariance γ,
+    estimated up to `max_lag` and tapered by a Parzen window (which keeps M
+    positive semi-definite).  ``M`` is computed in the frequency domain.  For
+    white residuals it reduces to ``s² A⁻¹``.
+
+    Parameters
+    ----------
+    jac : ndarray, shape (n, p)
+        Jacobian of the stacked residual.
+    residual : ndarray, shape (n,)
+        Stacked residual at the solution.
+    sizes : sequence of int
+        Rows per block, in order; they sum to n.
+    max_lag : int
+        Truncation lag of the autocovariance, samples.
+    """
+    p = jac.shape[1]
+    meat = np.zeros((p, p))
+    row = 0
+    for size in sizes:
+        J, r = jac[row:row + size], residual[row:row + size]
+        row += size
+        if size == 0:
+            continue
+        r = r - r.mean()
+        lag = min(max_lag, size - 1)
+        nfft = 1 << int(math.ceil(math.log2(2 * size)))
+        fr = np.fft.rfft(r, nfft)
+        acov = np.fft.irfft(fr * np.conj(fr), nfft)[: lag + 1] / size
+        u = np.arange(lag + 1) / (lag + 1)
+        parzen = np.where(u <= 0.5, 1 - 6 * u ** 2 + 6 * u ** 3, 2 * (1 - u) ** 3)
+        kernel = np.zeros(nfft)
+        kernel[: lag + 1] = acov * parzen
+        kernel[nfft - lag:] = (acov * parzen)[1:][::-1]
+        spectrum = np.fft.rfft(kernel).real           # the tapered autocovariance's spectrum
+        fj = np.fft.rfft(J, nfft, axis=0)
+        weights = np.full(fj.shape[0], 2.0)
+        weights[0] = 1.0
+        if nfft % 2 == 0:
+            weights[-1] = 1.0
+        meat += ((fj.conj() * (weights * spectrum)[:, None]).T @ fj).real / nfft
+    bread = np.linalg.pinv(jac.T @ jac)
+    return bread @ meat @ bread
 
 
 def _residual_parts(model: TractorFitModel, pred: dict):
@@ -111,12 +166,21 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
     else:
         x, jac, fun = x0, np.zeros((meas.size, 0)), residual(x0)
     params = theta_of(x)
-    pred = model.predict(params, step_s=step_s)
+    failed = False
+    try:
+        pred = model.predict(params, step_s=step_s)
+    except (ValueError, OverflowError, ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError):
+        x, params = x0, theta_of(x0)       # the solver left the model's domain: report the start, out of bounds
+        fun = residual(x0)
+        pred = model.predict(params, step_s=step_s)
+        failed = True
     parts = _residual_parts(model, pred)
     dof = max(1, fun.size - len(free))
     s2 = float(fun @ fun) / dof
     infl = float(np.mean([long_run_variance_ratio(parts[c]) for c in pb.channels]))
-    cov = np.linalg.pinv(jac.T @ jac) * s2 * infl
+    sizes = [int(w.sum())] * len(pb.channels)
+    lag = correlation_lag(pb.rec.sample_rate_hz, pb.cutoff_hz)
+    cov = sandwich_covariance(jac, fun, sizes, lag) * (fun.size / dof)
     q = float(stats.t.ppf(0.975, dof))
     ci = {}
     for i, (name, lg) in enumerate(zip(free, logs)):
@@ -129,13 +193,13 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
         shift = wrapped - params[name]
         params[name] = wrapped
         ci[name] = (ci[name][0] + shift, ci[name][1] + shift)
-    in_bounds = all(lo[n] <= params[n] <= hi[n] for n in free)
+    in_bounds = not failed and all(lo[n] <= params[n] <= hi[n] for n in free)
     sse = {c: float(r @ r) for c, r in parts.items()}
     nrmse = {c: float(np.sqrt(np.mean(parts[c] ** 2)) / np.sqrt(np.mean(pb.measured[c][w] ** 2)))
              for c in pb.channels}
     return TractorFit(model=model, params=params, ci=ci, sse=sse, nrmse=nrmse, prediction=pred,
                       evaluations=count[0], seconds=time.perf_counter() - t0,
-                      extra={"variance_inflation": infl, "in_bounds": in_bounds, "step_s": step_s or model.default_step_s(),
+                      extra={"variance_inflation": infl, "covariance_white": np.linalg.pinv(jac.T @ jac) * s2 * infl, "in_bounds": in_bounds, "step_s": step_s or model.default_step_s(),
                              "free": free, "covariance": cov, "logs": logs})
 
 

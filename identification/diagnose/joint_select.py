@@ -27,6 +27,7 @@ from ..recording import FRONT_TIRES
 from .joint_evidence import check_tractor
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
 from .joint_start import ENVELOPE_GUESS_M, body_start, refine_timing, starting_values
+from .joint_timing import BODY_DEFAULTS
 from .select import periodic_start
 from .tractor import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, parameter_unit
 
@@ -38,7 +39,7 @@ MAX_EFFECTS = 5
 SCREEN_STEP_S = 2e-3
 SCREEN_BUDGET = 150
 FINAL_BUDGET = 400
-_DEFAULTS = {"pitch_index": 0.9, "roll_index": 0.6, "pivot_index": 0.1, "exponent": 1.2, "friction": 100.0}
+_DEFAULTS = {**BODY_DEFAULTS, "exponent": 1.2, "friction": 100.0}
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,7 +157,8 @@ def _bic(sse_w: float, n: int, n_eff: float, p: int) -> float:
 def _candidate_start(model: TractorFitModel, current: TractorFit, start0: dict) -> dict:
     pb = model.problem
     s = dict(current.params)
-    for name, v in _DEFAULTS.items():
+    timing = start0["enveloped"] if "enveloping" in model.effects else start0
+    for name, v in {**_DEFAULTS, **timing["body"][1]}.items():   # the indices that placed the arrivals best
         s.setdefault(name, v)
     for axle in pb.axles():
         s.setdefault(f"footprint_{axle}", ENVELOPE_GUESS_M)
@@ -179,8 +181,11 @@ def _try(job):
     model = TractorFitModel(effects, current.model.problem)
     start = _candidate_start(model, current, start0)
     if set(new) & set(BODY_EFFECTS):
-        # the current model's k absorb the motion it lacks: scan around them and around the waveform fits
-        fresh = dict(start, **{n: start0[n] for n in model.names if n[:2] in ("k_", "c_")})
+        # the current model's k (and timing) absorb the motion it lacks: scan around them and around the
+        # waveform fits with the timing found under a coupled body
+        timing = start0["enveloped"] if "enveloping" in model.effects else start0
+        fresh = dict(start, **{n: start0[n] for n in model.names if n[:2] in ("k_", "c_")},
+                     **{n: timing[n] for n in ("arrival", "stagger", "delay") if n in model.names})
         options = [body_start(model, s, step_s=SCREEN_STEP_S) for s in (start, fresh)]
         start = min(options, key=lambda s: sse_of(model, s, SCREEN_STEP_S))
     fit = fit_tractor(model, start, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET)

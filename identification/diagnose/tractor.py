@@ -32,7 +32,7 @@ from ..acquisition import sensed_acceleration
 from ..errors import InputError
 from ..model import Body, Cleat, TractorModel
 from ..model.kernels import run_model
-from ..preprocess import DEFAULT_CUTOFF_HZ, lowpass, preprocess
+from ..preprocess import DEFAULT_CUTOFF_HZ, lowpass, noise_rms, preprocess
 from ..recording import FRONT_TIRES, TIRES, Recording
 from .models import _UNLOADED_RADIUS_M as UNLOADED_RADIUS_M, tire_law_parameters
 
@@ -56,6 +56,9 @@ _UNITS = {"k": ("N/m", "tire stiffness (tangent at the static load)"), "c": ("N 
 #: Signed parameters (the others are positive and fitted as logarithms).
 SIGNED = ("arrival", "stagger", "lug_amplitude", "lug_phase")
 LEAD_S = 0.05
+#: Margin before the first detected onset of the samples that give the noise floor, s (the robust RMS
+#: ignores the few samples of an enveloping impact that rises before its onset is detected).
+QUIET_MARGIN_S = 0.05
 PRE_S = 0.3
 DEFAULT_STEP_S = 1e-3
 #: Largest phase 2π f_aa h of the grid step at the anti-alias cut-off for models with point-contact edges.
@@ -69,6 +72,28 @@ def parameter_unit(name: str) -> tuple[str, str]:
 
 def _axle(tire: str) -> str:
     return "front" if tire in FRONT_TIRES else "rear"
+
+
+def _noise_floor(rec: Recording, channels, filtered: dict, quiet: np.ndarray, fallback: dict) -> dict:
+    """Noise RMS of each low-passed channel, from the samples before the first impact of any tire.
+
+    A channel's own onset may come after another tire's impact, so every
+    channel uses the span before the first one.  The low-passed span holds
+    few independent samples (its bandwidth is narrow), so its robust RMS
+    scatters by tens of percent from channel to channel; the raw span holds
+    many.  Each channel's floor is therefore its raw robust RMS times the share
+    of the noise the low-pass keeps, that share pooled over the channels (the
+    median ratio), which needs no assumption on the noise's spectrum.  Under
+    0.1 s of quiet samples: `fallback`.
+    """
+    if quiet.sum() / rec.sample_rate_hz < 0.1:
+        return dict(fallback)
+    raw = {c: noise_rms(rec.accel_m_s2[c][quiet]) for c in channels}
+    ratios = [noise_rms(filtered[c][quiet]) / raw[c] for c in channels if raw[c] > 0]
+    if not ratios:
+        return dict(fallback)
+    kept = float(np.median(ratios))
+    return {c: raw[c] * kept if raw[c] > 0 else fallback[c] for c in channels}
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,8 +123,10 @@ class TractorProblem:
         window = t >= max(t[0], first - LEAD_S)
         if window.sum() < 20:
             raise InputError(rec.source, "too few samples after the first impact to fit a model")
+        noise = _noise_floor(rec, channels, {c: sigs[c].filtered_m_s2 for c in channels}, t < first - QUIET_MARGIN_S,
+                             {c: sigs[c].noise_m_s2 for c in channels})
         return cls(rec=rec, channels=channels, measured={c: sigs[c].filtered_m_s2 for c in channels},
-                   noise={c: max(sigs[c].noise_m_s2, 1e-6) for c in channels},
+                   noise={c: max(noise[c], 1e-6) for c in channels},
                    onsets={c: sigs[c].impact_s for c in channels},
                    dominant_hz={c: sigs[c].dominant_hz for c in channels}, window=window, cutoff_hz=cutoff_hz,
                    step_s=step_s, first_impact_s=first)

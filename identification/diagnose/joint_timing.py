@@ -1,0 +1,209 @@
+"""Cleat arrivals of a whole-tractor recording: one search over every channel, cross-talk included.
+
+Every hub feels the other tires' impacts through the body (with a pivoting
+front axle, a front impact throws the other front hub the opposite way), so a
+channel's first or largest burst is not necessarily its own impact.  The
+arrivals are therefore found with a linear model of the whole tractor:
+
+* for a body hypothesis (four corners, the rigid tractor, the tractor with a
+  pivoting front axle) and starting k, c per tire, the response of every
+  channel to one wheel's cleat is simulated once (``H[w][c]``);
+* for arrivals ``a_w`` the model is the superposition ``Σ_w H[w][c](t − a_w)``
+  (exact for the linear model), and its squared misfit expands into
+  correlations of the measurement with the responses (one per wheel and
+  arrival) and of the responses with each other (one per pair and lag);
+* the arrival, left/right stagger and front/rear delay are searched
+  exhaustively, first on a ~2 ms grid, then at the sampling grid around the
+  best; the hypothesis that fits best gives the timing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..acquisition import sensed_acceleration
+from ..model.kernels import run_model
+from ..preprocess import lowpass
+from ..recording import FRONT_TIRES
+from .tractor import TractorFitModel, TractorProblem
+
+__all__ = ["joint_timing", "BODY_DEFAULTS", "MAX_STAGGER_S", "DELAY_RANGE"]
+
+#: Dynamic indices of the body hypotheses (a typical tractor).
+BODY_DEFAULTS = {"pitch_index": 0.9, "roll_index": 0.6, "pivot_index": 0.1}
+#: Pitch and roll indices of the body hypotheses.
+PITCH_GRID = (0.7, 1.1)
+ROLL_GRID = (0.35, 0.7)
+#: Largest left/right stagger considered, s.
+MAX_STAGGER_S = 0.3
+#: Front/rear delay considered, as a fraction of the sidecar's (its speed may be that far off).
+DELAY_RANGE = (0.8, 1.2)
+#: Length of each wheel's response kept, s.
+RESPONSE_S = 0.8
+#: Step of the coarse search, s.
+COARSE_S = 4e-3
+#: Window of the first (left or only side's front) arrival around the first detected burst, s.
+FIRST_WINDOW_S = (-0.35, 0.6)
+_STEP_S = 1e-3
+
+
+def body_hypotheses(pb: TractorProblem) -> list[tuple[tuple, dict]]:
+    """(body effects, dynamic indices) to try: the corners, and the coupled bodies the channels allow,
+    each over a small grid of pitch and roll indices (the cross-talk, hence the timing, depends on them)."""
+    out = [((), {})]
+    if len(pb.channels) == 4:
+        for body in (("axle_coupling", "roll_coupling"), ("axle_coupling", "roll_coupling", "front_axle_pivot")):
+            out += [(body, dict(BODY_DEFAULTS, pitch_index=p, roll_index=r))
+                    for p in PITCH_GRID for r in ROLL_GRID]
+    elif pb.both_axles:
+        out += [(("axle_coupling",), dict(BODY_DEFAULTS, pitch_index=p)) for p in PITCH_GRID]
+    elif pb.both_sides:
+        out += [(("roll_coupling",), dict(BODY_DEFAULTS, roll_index=r)) for r in ROLL_GRID]
+    return out
+
+
+def _responses(model: TractorFitModel, theta: dict, index: int, before: int, length: int) -> np.ndarray:
+    """``H[w, c, j]``: channel c's low-passed response, at sample ``index - before + j``, to wheel w's cleat
+    arriving at sample `index` (the other wheels off the cleat)."""
+    pb, rec = model.problem, model.problem.rec
+    t, fs = rec.time_s, rec.sample_rate_hz
+    base = model.record(theta)
+    m = len(pb.channels)
+    stop = min(t.size, index - before + length)
+    out = np.zeros((m, m, length))
+    far = float(t[-1]) + 100.0
+    for w in range(m):
+        arrivals = tuple(float(t[index]) if j == w else far for j in range(m))
+        record = dataclasses.replace(base, arrivals_s=arrivals)
+        traj = run_model(record, *record.grid(float(t[index]) - (before / fs) - 0.1, float(t[stop - 1]) + 0.01,
+                                              _STEP_S, 1.0 / fs))
+        for c in range(m):
+            y = lowpass(sensed_acceleration(traj, c, t[:stop], fs, rec.acquisition), sample_rate_hz=fs,
+                        cutoff_hz=pb.cutoff_hz)
+            seg = y[index - before:stop]
+            out[w, c, :seg.size] = seg
+    return out
+
+
+def _search(pb: TractorProblem, H: np.ndarray, before: int) -> tuple[float, int, int, int]:
+    """Best (score, first arrival index, stagger, delay in samples) for responses `H`."""
+    rec = pb.rec
+    fs, n = rec.sample_rate_hz, rec.time_s.size
+    m, _, length = H.shape
+    right = np.array([pb.both_sides and c in ("FR", "RR") for c in pb.channels], dtype=int)
+    rear = np.array([pb.both_axles and c not in FRONT_TIRES for c in pb.channels], dtype=int)
+    y = np.stack([pb.measured[c] for c in pb.channels])
+    ypad = np.concatenate([y, np.zeros((m, length))], axis=1)
+    # linear terms: lin[w, a] = Σ_c <y_c, H[w, c](· − a)>, arrival a = sample index (the response starts `before` earlier)
+    lin = np.full((m, n), -np.inf)
+    for w in range(m):
+        corr = sum(np.correlate(ypad[c], H[w, c], mode="valid") for c in range(m))   # index: a − before
+        a = np.arange(n)
+        ok = (a - before >= 0) & (a - before < corr.size)
+        lin[w, ok] = corr[a[ok] - before]
+    # cross terms: cross[w, v][lag + length − 1] = Σ_c Σ_j H[w, c, j] H[v, c, j − lag], lag = a_v − a_w
+    cross = {(w, v): sum(np.correlate(H[w, c], H[v, c], mode="full") for c in range(m))
+             for w in range(m) for v in range(w + 1, m)}
+    energy = float(sum(np.sum(H[w] ** 2) for w in range(m)))
+
+    def q(w, v, lag):   # Q_wv at integer lags (array), zero beyond the responses' length
+        lag = np.asarray(lag)
+        out = np.zeros(lag.shape)
+        ok = np.abs(lag) < length
+        out[ok] = cross[(w, v)][lag[ok] + length - 1]
+        return out
+
+    nominal = rec.rear_axle_delay_s()
+    first = int(round((pb.first_impact_s - rec.time_s[0]) * fs))
+
+    def at(w, idx):   # lin[w, idx], -inf outside the record
+        idx = np.asarray(idx)
+        inside = (idx >= 0) & (idx < n)
+        return np.where(inside, lin[w, np.clip(idx, 0, n - 1)], -np.inf)
+
+    def cross_at(s, d):
+        return sum(2 * q(w, v, (right[v] - right[w]) * s + (rear[v] - rear[w]) * d) for (w, v) in cross)
+
+    def score(i, s, d):   # arrays broadcast: i first arrival, s stagger, d delay (samples)
+        total = energy + cross_at(s, d)
+        for w in range(m):
+            total = total - 2 * at(w, i + right[w] * s + rear[w] * d)
+        return total
+
+    step = max(1, int(round(COARSE_S * fs)))
+    i_range = np.arange(max(0, first + int(FIRST_WINDOW_S[0] * fs)), min(n, first + int(FIRST_WINDOW_S[1] * fs)), step)
+    s_range = np.arange(-int(MAX_STAGGER_S * fs), int(MAX_STAGGER_S * fs) + 1, step) if pb.both_sides else np.zeros(1, int)
+    d_range = (np.arange(int(DELAY_RANGE[0] * nominal * fs), int(DELAY_RANGE[1] * nominal * fs) + 1, step)
+               if pb.both_axles else np.zeros(1, int))
+    every = np.arange(n)
+    best = (math.inf, 0, 0, 0)
+    for s in s_range:
+        front = sum((at(w, i_range + right[w] * s) for w in range(m) if not rear[w]), np.zeros(i_range.size))
+        back = sum((at(w, every + right[w] * s) for w in range(m) if rear[w]), np.zeros(n))
+        idx = i_range[None, :] + d_range[:, None]
+        sc = (energy + cross_at(s, d_range)[:, None]
+              - 2 * (front[None, :] + np.where(idx < n, back[np.clip(idx, 0, n - 1)], -np.inf)))
+        j = int(np.argmin(sc))
+        if sc.flat[j] < best[0]:
+            di, ii = np.unravel_index(j, sc.shape)
+            best = (float(sc.flat[j]), int(i_range[ii]), int(s), int(d_range[di]))
+    # refine at the sampling grid
+    _, i0, s0, d0 = best
+    around = np.arange(-step, step + 1)
+    ii, ss, dd = np.meshgrid(i0 + around, s0 + (around if pb.both_sides else 0),
+                             d0 + (around if pb.both_axles else 0), indexing="ij")
+    sc = score(ii, ss, dd)
+    j = int(np.argmin(sc))
+    return float(sc.flat[j]), int(ii.flat[j]), int(ss.flat[j]), int(dd.flat[j])
+
+
+def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypotheses=None) -> dict:
+    """Arrival, stagger and delay of every channel at once, with the body's cross-talk.
+
+    Parameters
+    ----------
+    pb : TractorProblem
+    start : dict
+        ``k_<TIRE>``, ``c_<TIRE>`` per channel.
+    footprint_m : float
+        Footprint of the tires enveloping the cleat (0: point contact).
+    hypotheses : list of (tuple, dict), optional
+        Body hypotheses (effects, indices) to try (default: :func:`body_hypotheses`).
+
+    Returns
+    -------
+    dict
+        ``arrival`` (the left or only side's front arrival, s), ``stagger``
+        (right minus left, s) with both sides, ``delay`` (rear minus front, s)
+        with both axles, and ``body``: the hypothesis that fitted best, as
+        ``(effects, indices)``.
+    """
+    rec = pb.rec
+    fs, t = rec.sample_rate_hz, rec.time_s
+    lead = footprint_m / 2 / rec.speed_m_s
+    before = int(math.ceil((lead + 0.02) * fs))
+    length = before + int(round(RESPONSE_S * fs))
+    index = min(t.size - 1, before + int(math.ceil(0.1 * fs)))
+    best = None
+    for body, indices in (hypotheses or body_hypotheses(pb)):
+        effects = body + (("enveloping",) if footprint_m else ())
+        model = TractorFitModel(effects, pb)
+        theta = {name: start.get(name, indices.get(name, 0.0)) for name in model.names}
+        for name in model.names:
+            if name.startswith("footprint_"):
+                theta[name] = footprint_m
+        H = _responses(model, theta, index, before, length)
+        found = _search(pb, H, before)
+        if best is None or found[0] < best[0][0]:
+            best = (found, (body, indices))
+    (_, i, s, d), body = best
+    out = {"arrival": float(t[i])}
+    if pb.both_sides:
+        out["stagger"] = float(s / fs)
+    if pb.both_axles:
+        out["delay"] = float(d / fs)
+    out["body"] = body
+    return out
