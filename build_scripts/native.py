@@ -65,9 +65,13 @@ def cache_dir() -> Path:
 
 
 def _fmpy_headers() -> Path:
-    import fmpy
+    """fmpy's folder of FMI headers, located without importing fmpy (and numpy with it)."""
+    from importlib.util import find_spec
 
-    return Path(fmpy.__file__).parent / "c-code"
+    spec = find_spec("fmpy")
+    if spec is None or spec.origin is None:
+        raise ValueError("the native backend needs fmpy's FMI headers (pip install fmpy)")
+    return Path(spec.origin).parent / "c-code"
 
 
 def source_files(kind: FmuKind, fmi_version: int) -> dict[str, bytes]:

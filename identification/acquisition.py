@@ -198,12 +198,22 @@ def _chain(x, t0, h, cut_cell, cut_t, cut_before, cut_after, cut_jump, poles, re
     return out
 
 
-try:   # pragma: no cover - numba is a dependency; without it the loops run in plain Python
-    import numba
-    hold = numba.njit(cache=True)(hold)
-    _chain = numba.njit(cache=True)(_chain)
-except ImportError:   # pragma: no cover
-    pass
+_COMPILED: dict = {}
+
+
+def _chain_kernel():
+    """:func:`_chain` compiled with numba, on first use (importing numba is a start-up cost that commands
+    not filtering anything, like ``export``, do not pay); plain Python without numba."""
+    global hold
+    if "chain" not in _COMPILED:
+        try:
+            import numba
+        except ImportError:   # pragma: no cover - numba is a dependency
+            _COMPILED["chain"] = _chain
+        else:
+            hold = numba.njit(cache=True)(hold)
+            _COMPILED["chain"] = numba.njit(cache=True)(_chain)
+    return _COMPILED["chain"]
 
 
 def apply_chain(acc: np.ndarray, t0: float, h: float, cuts, poles, residues, direct: float,
@@ -249,7 +259,7 @@ def apply_chain(acc: np.ndarray, t0: float, h: float, cuts, poles, residues, dir
         np.asarray(start_weights, dtype=complex)
     for i in range(ch):
         vals = [np.array([float(np.broadcast_to(c[j], (ch,))[i]) for _, c in kept]) for j in (1, 2, 3)]
-        out[i] += _chain(np.ascontiguousarray(acc[i]), float(t0), float(h), cell, times, *vals, poles, residues,
+        out[i] += _chain_kernel()(np.ascontiguousarray(acc[i]), float(t0), float(h), cell, times, *vals, poles, residues,
                          weights)
     return out
 

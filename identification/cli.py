@@ -13,10 +13,7 @@ import sys
 
 from . import __version__
 from .errors import InputError
-from .examples import EXAMPLES, example_path
-from .identify import identify
-from .preprocess import DEFAULT_CUTOFF_HZ
-from .recording import TIRES, read_recording
+from .examples import EXAMPLES
 
 __all__ = ["main", "build_parser"]
 
@@ -24,9 +21,16 @@ __all__ = ["main", "build_parser"]
 #: registers the command with ``set_defaults(func=...)``; ``func(args)``
 #: returns the exit status and raises InputError for user errors.
 _COMMAND_MODULES: list[str] = [".rig.command", ".export", ".simulate_cmd", ".diagnose.command", ".report_cmd"]
+#: The module of each command: a command line naming one of these loads only its module (the others may
+#: import scipy, numba or matplotlib, seconds of start-up an ``export`` does not need).
+_COMMAND_MODULE_OF: dict[str, str] = {"rig": ".rig.command", "export": ".export", "simulate": ".simulate_cmd",
+                                      "diagnose": ".diagnose.command", "demo": ".report_cmd",
+                                      "report": ".report_cmd"}
 
 
 def _tire_list(values: list[str] | None) -> list[str] | None:
+    from .recording import TIRES
+
     if not values:
         return None
     out: list[str] = []
@@ -40,6 +44,9 @@ def _tire_list(values: list[str] | None) -> list[str] | None:
 
 
 def _recording_arg(args):
+    from .examples import example_path
+    from .recording import read_recording
+
     if args.example is not None:
         if args.recording is not None:
             raise InputError("--example", "give either a recording or --example, not both")
@@ -73,6 +80,8 @@ def cmd_identify(args) -> int:
         from .waveform import identify_waveform_recording
         results = identify_waveform_recording(rec, _tire_list(args.tire), cutoff_hz=args.cutoff_hz)
     else:
+        from .identify import identify
+
         results = identify(rec, _tire_list(args.tire), cutoff_hz=args.cutoff_hz)
     if args.json:
         doc = {"recording": rec.source, "speed_kmh": rec.speed_kmh,
@@ -83,11 +92,52 @@ def cmd_identify(args) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _command_of(argv) -> str | None:
+    """The command named by `argv` (its first argument, when that is no option), else None."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    return argv[0] if argv and not str(argv[0]).startswith("-") else None
+
+
+def _parts(command: str | None) -> tuple[bool, list[str]]:
+    """Whether the parser needs ``identify``, and the command modules it needs, for `command`."""
+    if command == "identify":
+        return True, []
+    module = _COMMAND_MODULE_OF.get(command)
+    if module is not None and module in _COMMAND_MODULES:
+        return False, [module]
+    return True, list(_COMMAND_MODULES)
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser of every command, or only of `command` (if it is a known one).
+
+    Parameters
+    ----------
+    command : str, optional
+        A command name: only its sub-parser is built and only its module imported (the start-up
+        time of one command).  None, or an unknown name: every command (``--help`` lists them,
+        and a misspelt command gets argparse's list of choices).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser.
+    """
+    with_identify, modules = _parts(command)
     parser = argparse.ArgumentParser(prog="cleatfmu", description="Tire stiffness and damping from cleat tests, "
                                      "exported as FMI 2.0 and 3.0 co-simulation FMUs.")
     parser.add_argument("--version", action="version", version=f"cleatfmu {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    if with_identify:
+        _add_identify(sub)
+    for module in modules:
+        importlib.import_module(module, __package__).add_parser(sub)
+    return parser
+
+
+def _add_identify(sub) -> None:
+    """Register ``cleatfmu identify``."""
+    from .preprocess import DEFAULT_CUTOFF_HZ
 
     p = sub.add_parser("identify", help="identify tire stiffness k and damping c from a cleat recording",
                        description="Identify k and c of each tire by the cleat-test paper's method "
@@ -105,14 +155,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ,
                    help="low-pass cut-off, Hz (default %(default)g; zero-phase 5th-order Butterworth)")
     p.set_defaults(func=cmd_identify)
-    for module in _COMMAND_MODULES:
-        importlib.import_module(module, __package__).add_parser(sub)
-    return parser
 
 
 def main(argv=None) -> int:
     """Run the CLI; returns the exit status."""
-    parser = build_parser()
+    parser = build_parser(_command_of(argv))
     args = parser.parse_args(argv)
     try:
         return args.func(args)

@@ -94,6 +94,7 @@ class TireFmu:
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=instance_name)
         self.slave.instantiate()
+        self._initialized = False
         self._start_values = dict(start_values or {})
         self.input_vrs = [self.vr[n] for n in INPUTS + (LONGITUDINAL if self.longitudinal else ())]
         self.force_vr = [self.vr[FORCE]]
@@ -110,6 +111,7 @@ class TireFmu:
                 s.setBoolean([self.vr[n] for n in bools], list(bools.values()))
         s.enterInitializationMode()
         s.exitInitializationMode()
+        self._initialized = True
 
     def parameters(self) -> dict[str, float | bool]:
         """Current values of the parameters: the Real ones as floats, the Boolean ones
@@ -147,9 +149,11 @@ class TireFmu:
         return force
 
     def close(self) -> None:
+        """Terminate (if initialized; FMI refuses terminate before that) and free the instance."""
         if self.slave is not None:
             try:
-                self.slave.terminate()
+                if self._initialized:
+                    self.slave.terminate()
             finally:
                 self.slave.freeInstance()
                 self.slave = None

@@ -29,7 +29,6 @@ import math
 from pathlib import Path, PureWindowsPath
 
 from .errors import InputError
-from .recording import STANDARD_GRAVITY
 from .tire_law import value_problem
 
 __all__ = ["DEFAULT_UNLOADED_RADIUS_M", "FMU_KIND", "read_identified", "export_fmu", "add_parser", "run"]
@@ -40,6 +39,9 @@ DEFAULT_UNLOADED_RADIUS_M = 0.75
 FMU_KIND = "point_contact"
 
 _NUMBERS = ("k", "c", "T", "delta", "zeta", "omega_n", "r2", "mass")
+#: Standard gravity, m/s² (:data:`identification.recording.STANDARD_GRAVITY`, not imported from there: that
+#: module loads numpy, which an export does not need).
+_STANDARD_GRAVITY = 9.80665
 
 
 def _number(value) -> bool:
@@ -208,7 +210,7 @@ def export_fmu(params_path, output_path, *, tire: str | None = None, unloaded_ra
     starts = {"stiffness": entry["k"], "damping": entry["c"], "unloaded_radius": radius}
     description = _description(doc, tire, starts, entry, radius_given)
     if backend == "native" and _number(entry.get("mass")) and entry["mass"] > 0:
-        starts["hub_z"] = radius - entry["mass"] * STANDARD_GRAVITY / entry["k"]  # static equilibrium, m
+        starts["hub_z"] = radius - entry["mass"] * _STANDARD_GRAVITY / entry["k"]  # static equilibrium, m
     try:
         return build_fmu(FMU_KIND, output_path, start_values=starts, provenance=provenance,
                          description=description, backend=backend, fmi_version=fmi_version, platforms=platforms)

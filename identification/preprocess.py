@@ -30,7 +30,6 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from .errors import InputError
 from .recording import FRONT_TIRES, REAR_TIRES, STANDARD_GRAVITY, Recording
@@ -124,6 +123,8 @@ def lowpass(x, *, sample_rate_hz: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ,
     if cutoff_hz >= sample_rate_hz / 2 * (1 - 1e-9):
         raise InputError(source, f"low-pass cut-off {cutoff_hz:g} Hz is not below the Nyquist frequency "
                                  f"{sample_rate_hz / 2:g} Hz (sampling rate {sample_rate_hz:g} Hz)")
+    from scipy import signal   # here, not at import: a second of start-up for commands that never filter
+
     sos, zi, edge = _butter_sos(order, float(cutoff_hz), float(sample_rate_hz))
     x = np.asarray(x, dtype=float)
     if x.ndim != 1 or x.size <= edge:      # scipy's checks and messages for what the fast path does not take
@@ -139,6 +140,8 @@ def lowpass(x, *, sample_rate_hz: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ,
 @functools.lru_cache(maxsize=64)
 def _butter_sos(order: int, cutoff_hz: float, sample_rate_hz: float):
     """The Butterworth design, once per (order, cut-off, rate): (sos, sosfilt_zi, pad length)."""
+    from scipy import signal
+
     sos = signal.butter(order, cutoff_hz, fs=sample_rate_hz, output="sos")
     zi = signal.sosfilt_zi(sos)
     ntaps = 2 * len(sos) + 1 - min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum()))
@@ -346,6 +349,8 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
 
 
 def _free_peaks(rec, name, x, t_imp, free_start, window_end, sigma, cutoff_hz, min_peaks=3) -> TireSignal:
+    from scipy import signal
+
     src, t, fs = rec.source, rec.time_s, rec.sample_rate_hz
     a = int(np.searchsorted(t, free_start))
     b = int(np.searchsorted(t, window_end, side="right"))

@@ -96,7 +96,7 @@ def build_tractor_fmus(fit, directory, stem: str, *, description_prefix: str = "
                 f"{', '.join(effects) or 'none'}. Parameters: "
                 + "; ".join(f"{k} = {v}" if isinstance(v, bool) else f"{k} = {v:.6g}" for k, v in law.items())
                 + " (SI units).")
-        build_fmu("extended_tire", path, start_values=law, description=text,
+        build_fmu("extended_tire", path, start_values=law, description=text, backend="native",
                   provenance={"command": "cleatfmu diagnose", "tire": tire, "effects": effects,
                               "recording": Path(rec.source).name})
         out.append(path)

@@ -397,3 +397,17 @@ def test_linux_binary_needs_only_libc_and_libm_of_glibc_2_17(native_fmus):
     versions = {tuple(map(int, v)) for v in re.findall(rb"GLIBC_(\d+)\.(\d+)", data)}
     assert versions and max(versions) <= (2, 17), versions
     assert b"libpython" not in data and b"_Py_NoneStruct" not in data
+
+
+def test_closing_a_tire_fmu_that_was_never_initialized_frees_it_without_an_error(native_fmus):
+    """FMI refuses fmi2Terminate before initialization (the native FMU says so): close() must not call it,
+    or its error would hide the one that stopped the run and leave the other instances open."""
+    from identification.cosim import TireFmu
+
+    tire = TireFmu(native_fmus["extended_tire"])
+    tire.close()
+    assert tire.slave is None
+    with TireFmu(native_fmus["point_contact"]) as other:
+        other.initialize(0.0)
+        assert other.parameters()["stiffness"] > 0
+    assert other.slave is None

@@ -67,7 +67,7 @@ def build_extended_fmus(model: Model, params: dict, out_path) -> list[Path]:
                   provenance={"command": "cleatfmu diagnose", "tire": model.problem.tire if which == "tire"
                               else model.problem.other, "effects": sorted(model.effects),
                               "recording": model.problem.rec.source},
-                  description=_description(model, params, which))
+                  description=_description(model, params, which), backend="native")
     return paths
 
 

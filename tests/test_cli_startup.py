@@ -1,0 +1,56 @@
+"""Start-up of the command line: a command builds only its own parser and imports only what it needs."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+from identification import cli
+from identification.recording import STANDARD_GRAVITY
+
+#: Packages that take most of a second to import and that ``cleatfmu export`` does not need.
+HEAVY = ("scipy", "numba", "matplotlib", "fmpy", "control", "numpy")
+
+
+def _choices(parser) -> dict:
+    """``{command: its sub-parser}`` of a cleatfmu parser."""
+    (action,) = [a for a in parser._actions if a.dest == "command"]
+    return dict(action.choices)
+
+
+def test_every_command_gets_the_same_parser_alone_as_among_all():
+    full = _choices(cli.build_parser())
+    assert set(full) == {"identify", *cli._COMMAND_MODULE_OF}
+    for name, sub in full.items():
+        alone = _choices(cli.build_parser(name))
+        assert name in alone, name
+        assert alone[name].get_default("func") is sub.get_default("func"), name
+        assert [a.dest for a in alone[name]._actions] == [a.dest for a in sub._actions], name
+    assert set(_choices(cli.build_parser("exprt"))) == set(full)  # a misspelt command: every choice listed
+
+
+def test_export_imports_neither_scipy_numba_matplotlib_nor_fmpy_beyond_the_package(tmp_path):
+    """In a fresh interpreter, ``cleatfmu export`` of a native FMU (cached binaries) adds none of the heavy
+    packages to those that ``import identification`` itself loads; the FMU's hub starts at the static
+    equilibrium of the corner mass: r0 - m g / k."""
+    params = tmp_path / "params.json"
+    k, mass = 412345.0, 1716.2
+    params.write_text(json.dumps({"tires": {"FL": {"k": k, "c": 2345.0, "mass": mass}}}), encoding="utf-8")
+    fmu = tmp_path / "FL.fmu"
+    script = (f"import sys, identification\n"
+              f"before = set(sys.modules)\n"
+              f"from identification.cli import main\n"
+              f"status = main(['export', {str(params)!r}, '-o', {str(fmu)!r}, '--platforms', 'linux64'])\n"
+              f"new = sorted(m for m in set(sys.modules) - before if m.split('.')[0] in {HEAVY!r})\n"
+              f"print(status, ' '.join(new))\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    status, _, new = done.stdout.splitlines()[-1].partition(" ")
+    assert status == "0" and new == "", done.stdout
+    from fmpy import read_model_description
+
+    starts = {v.name: float(v.start) for v in read_model_description(str(fmu)).modelVariables
+              if v.start is not None}
+    assert starts["hub_z"] == 0.75 - mass * STANDARD_GRAVITY / k
+    assert starts["stiffness"] == k
