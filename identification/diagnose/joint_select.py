@@ -231,7 +231,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     tick("baseline")
     base_model = TractorFitModel((), pb)
     baseline = fit_tractor(base_model, refine_timing(base_model, {n: start0[n] for n in base_model.names}),
-                           budget=FINAL_BUDGET)
+                           budget=FINAL_BUDGET, step_check=True)
     n = int(pb.window.sum()) * len(pb.channels)
     n_eff = n * min(1.0, 2 * cutoff_hz / rec.sample_rate_hz)
     current, selected, rounds, evidence = baseline, [], [], {}
@@ -258,7 +258,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
                 break
             tick(f"refit {best.fit.label}")
             current = fit_tractor(best.fit.model, refine_timing(best.fit.model, best.fit.params),
-                                  budget=FINAL_BUDGET)
+                                  budget=FINAL_BUDGET, step_check=True)
             selected += best.effect.split("+")
             evidence.update(best.evidence)
     finally:
@@ -267,7 +267,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     if current.model.has_sharp_edges:   # the final fit with the cleat edges resolved for the anti-alias filter
         tick(f"refit {current.label}, edges resolved")
         fine = TractorFitModel(current.model.effects, pb, resolve_edges=True)
-        current = fit_tractor(fine, current.params, budget=FINAL_BUDGET)
+        current = fit_tractor(fine, current.params, budget=FINAL_BUDGET, step_check=True)
     left = {c: unexplained(pb, current.prediction, c) for c in pb.channels}
     return TractorDiagnosis(problem=pb, effects=selected, baseline=baseline, final=current, rounds=rounds,
                             evidence=evidence, unexplained=left, seconds=time.perf_counter() - t0,
