@@ -24,16 +24,50 @@ def native_fmus(tmp_path_factory) -> dict:
             for kind in ("point_contact", "extended_tire")}
 
 
-@pytest.fixture(scope="session")
-def c_host(tmp_path_factory) -> Path:
-    """The C host ``tests/native_host.c`` compiled with gcc (skips where gcc is missing)."""
+def _compile_host(tmp_path_factory, source: str) -> Path:
+    """Compile the C host `source` (in tests/) with gcc, warnings as errors; skips where gcc is missing."""
     gcc = shutil.which("gcc")
     if gcc is None:
         pytest.skip("gcc is not installed")
-    exe = tmp_path_factory.mktemp("host") / "native_host"
-    subprocess.run([gcc, "-std=c99", "-O2", "-I", str(_fmpy_headers()), "-o", str(exe),
-                    str(Path(__file__).with_name("native_host.c")), "-ldl"], check=True)
+    exe = tmp_path_factory.mktemp("host") / Path(source).stem
+    subprocess.run([gcc, "-std=c99", "-O2", "-Wall", "-Werror", "-I", str(_fmpy_headers()), "-o", str(exe),
+                    str(Path(__file__).with_name(source)), "-ldl"], check=True)
     return exe
+
+
+@pytest.fixture(scope="session")
+def c_host(tmp_path_factory) -> Path:
+    """The C host ``tests/native_host.c`` compiled with gcc (skips where gcc is missing)."""
+    return _compile_host(tmp_path_factory, "native_host.c")
+
+
+def assert_step_response(rows, *, k: float, c: float, r0: float, load: float, height: float, h: float,
+                         columns=(1, 2, 3)) -> None:
+    """A quarter car (mass load/g) on the point-contact tire, road stepping by `height` at 0.1 s, stepped
+    by a host: equal to the same master in Python with the Python law to round-off, settling `height`
+    higher, with the damped oscillator's overshoot.  `rows[i, columns]` are (z, vz, force) after step i."""
+    import math
+
+    import numpy as np
+
+    from identification import tire_law
+
+    g = 9.80665
+    mass = load / g
+    z, v, t = r0 - load / k, 0.0, 0.0
+    for i in range(rows.shape[0]):
+        f = tire_law.point_contact(z, v, height if t >= 0.1 else 0.0, 0.0, k, c, r0)[0]
+        v += h * (f / mass - g)
+        z += h * v
+        t = (i + 1) * h
+        if i % 1000 == 999 or i == rows.shape[0] - 1:
+            np.testing.assert_allclose(rows[i, list(columns)], [z, v, f], rtol=1e-12, atol=1e-12)
+    z0 = r0 - load / k
+    hub = rows[:, columns[0]]
+    assert hub[-1] - z0 == pytest.approx(height, rel=1e-4)
+    zeta = c / (2.0 * math.sqrt(k * mass))
+    overshoot = (hub.max() - z0 - height) / height
+    assert overshoot == pytest.approx(math.exp(-zeta * math.pi / math.sqrt(1 - zeta ** 2)), rel=0.03)
 
 
 def extract(fmu, folder: Path) -> Path:
@@ -71,13 +105,7 @@ def native_fmus3(tmp_path_factory) -> dict:
 @pytest.fixture(scope="session")
 def c_host3(tmp_path_factory) -> Path:
     """The FMI 3.0 C host ``tests/native_host3.c`` compiled with gcc (skips where gcc is missing)."""
-    gcc = shutil.which("gcc")
-    if gcc is None:
-        pytest.skip("gcc is not installed")
-    exe = tmp_path_factory.mktemp("host3") / "native_host3"
-    subprocess.run([gcc, "-std=c99", "-O2", "-Wall", "-Werror", "-I", str(_fmpy_headers()), "-o", str(exe),
-                    str(Path(__file__).with_name("native_host3.c")), "-ldl"], check=True)
-    return exe
+    return _compile_host(tmp_path_factory, "native_host3.c")
 
 
 def run_host3(host: Path, unzipped: Path, resource_path: str, token: str, *args) -> str:

@@ -8,7 +8,7 @@ import zipfile
 import numpy as np
 import pytest
 from fmu_helpers import assert_fmpy_matches_the_reference, assert_libcosim_matches_fmpy
-from native_fixtures import AWKWARD_DIR, c_host, extract, guid, native_fmus, run_host  # noqa: F401
+from native_fixtures import AWKWARD_DIR, assert_step_response, c_host, extract, guid, native_fmus, run_host  # noqa: F401,E501
 
 from build_scripts import build_fmu, load_kind
 from build_scripts.binary_exports import exported_names, fmi_function_names
@@ -285,21 +285,7 @@ def test_c_host_step_response_matches_the_python_law_and_the_damped_oscillator(c
     rows = np.array([[float(x) for x in line.split()] for line in
                      run_host(c_host, unzipped, (unzipped / "resources").as_uri(), guid(fmu), "step", mass, height,
                               n, h).splitlines()])
-    # The same master in Python with the Python law: identical to round-off.
-    z, v, t = r0 - load / k, 0.0, 0.0
-    for i in range(n):
-        f = tire_law.point_contact(z, v, height if t >= 0.1 else 0.0, 0.0, k, c, r0)[0]
-        v += h * (f / mass - G)
-        z += h * v
-        t = (i + 1) * h
-        if i % 1000 == 999 or i == n - 1:
-            np.testing.assert_allclose(rows[i, 1:4], [z, v, f], rtol=1e-12, atol=1e-12)
-    # Physics: the hub settles height higher; its overshoot is the damped oscillator's.
-    z0 = r0 - load / k
-    assert rows[-1, 1] - z0 == pytest.approx(height, rel=1e-4)
-    zeta = c / (2.0 * math.sqrt(k * mass))
-    overshoot = (rows[:, 1].max() - z0 - height) / height
-    assert overshoot == pytest.approx(math.exp(-zeta * math.pi / math.sqrt(1 - zeta ** 2)), rel=0.03)
+    assert_step_response(rows, k=k, c=c, r0=r0, load=load, height=height, h=h)
 
 
 def test_binaries_are_cached_per_platform_and_law_version(native_fmus, tmp_path, monkeypatch):

@@ -8,8 +8,8 @@ import subprocess
 
 import numpy as np
 import pytest
-from native_fixtures import (AWKWARD_DIR, c_host3, extract, guid, law_force, native_fmus3,  # noqa: F401
-                             run_host3, start_values)
+from native_fixtures import (AWKWARD_DIR, assert_step_response, c_host3, extract, guid, law_force,  # noqa: F401
+                             native_fmus3, run_host3, start_values)
 
 from build_scripts import build_fmu
 from identification import tire_law
@@ -59,18 +59,4 @@ def test_fmi3_c_host_step_response_matches_the_python_law_and_the_damped_oscilla
                                h).splitlines()])
     assert rows.shape == (n, 5)
     np.testing.assert_allclose(rows[:, 4], rows[:, 0], rtol=1e-12, atol=0.0)  # the FMU's time variable
-    # The same master in Python with the Python law: identical to round-off.
-    z, v, t = r0 - load / k, 0.0, 0.0
-    for i in range(n):
-        f = tire_law.point_contact(z, v, height if t >= 0.1 else 0.0, 0.0, k, c, r0)[0]
-        v += h * (f / mass - G)
-        z += h * v
-        t = (i + 1) * h
-        if i % 1000 == 999 or i == n - 1:
-            np.testing.assert_allclose(rows[i, 1:4], [z, v, f], rtol=1e-12, atol=1e-12)
-    # Physics: the hub settles height higher; its overshoot is the damped oscillator's.
-    z0 = r0 - load / k
-    assert rows[-1, 1] - z0 == pytest.approx(height, rel=1e-4)
-    zeta = c / (2.0 * math.sqrt(k * mass))
-    overshoot = (rows[:, 1].max() - z0 - height) / height
-    assert overshoot == pytest.approx(math.exp(-zeta * math.pi / math.sqrt(1 - zeta ** 2)), rel=0.03)
+    assert_step_response(rows, k=k, c=c, r0=r0, load=load, height=height, h=h)

@@ -34,6 +34,8 @@ __all__ = ["TractorFit", "fit_tractor", "sse_of", "unexplained", "sandwich_covar
 
 #: A channel whose residual RMS exceeds this multiple of its noise RMS holds unexplained signal.
 UNEXPLAINED_RATIO = 1.5
+#: Largest half-step move (log scale for positive parameters) applied to the estimates.
+MAX_STEP_SHIFT = 0.02
 _DIFF_STEP = {"arrival": 2e-5, "stagger": 2e-5, "lug_phase": 1e-3, "lug_amplitude": 1e-3}
 
 
@@ -198,7 +200,8 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
     lag = correlation_lag(pb.rec.sample_rate_hz, pb.cutoff_hz)
     cov = sandwich_covariance(jac, fun, sizes, lag) * (fun.size / dof)
     q = float(stats.t.ppf(0.975, dof))
-    x = x + shift
+    if np.all(np.abs(shift) <= MAX_STEP_SHIFT):   # a larger move is no first-order correction: widen only
+        x = x + shift
     params = theta_of(x)
     ci = {}
     for i, (name, lg) in enumerate(zip(free, logs)):

@@ -157,6 +157,11 @@ def _bic(sse_w: float, n: int, n_eff: float, p: int) -> float:
 def _candidate_start(model: TractorFitModel, current: TractorFit, start0: dict) -> dict:
     pb = model.problem
     s = dict(current.params)
+    for name in [n for n in s if n[:2] in ("k_", "c_")]:
+        # a misspecified current model may have collapsed a tire (k or c off by more than a factor of
+        # three from its own waveform fit): start that tire from the waveform fit instead
+        if not start0[name] / 3 <= s[name] <= 3 * start0[name]:
+            s[name] = start0[name]
     timing = start0["enveloped"] if "enveloping" in model.effects else start0
     for name, v in {**_DEFAULTS, **timing["body"][1]}.items():   # the indices that placed the arrivals best
         s.setdefault(name, v)
@@ -231,7 +236,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     tick("baseline")
     base_model = TractorFitModel((), pb)
     baseline = fit_tractor(base_model, refine_timing(base_model, {n: start0[n] for n in base_model.names}),
-                           budget=FINAL_BUDGET, step_check=True)
+                           budget=FINAL_BUDGET)
     n = int(pb.window.sum()) * len(pb.channels)
     n_eff = n * min(1.0, 2 * cutoff_hz / rec.sample_rate_hz)
     current, selected, rounds, evidence = baseline, [], [], {}
@@ -258,7 +263,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
                 break
             tick(f"refit {best.fit.label}")
             current = fit_tractor(best.fit.model, refine_timing(best.fit.model, best.fit.params),
-                                  budget=FINAL_BUDGET, step_check=True)
+                                  budget=FINAL_BUDGET)
             selected += best.effect.split("+")
             evidence.update(best.evidence)
     finally:
@@ -268,6 +273,8 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
         tick(f"refit {current.label}, edges resolved")
         fine = TractorFitModel(current.model.effects, pb, resolve_edges=True)
         current = fit_tractor(fine, current.params, budget=FINAL_BUDGET, step_check=True)
+    else:   # the named model once more from its optimum, with the grid step checked
+        current = fit_tractor(current.model, current.params, budget=FINAL_BUDGET, step_check=True)
     left = {c: unexplained(pb, current.prediction, c) for c in pb.channels}
     return TractorDiagnosis(problem=pb, effects=selected, baseline=baseline, final=current, rounds=rounds,
                             evidence=evidence, unexplained=left, seconds=time.perf_counter() - t0,
