@@ -7,13 +7,17 @@ runs each set under the diagnosed body, interleaved over ``--rounds``.  Prints
 
 * the wall time per run (median, range) of each backend and the ratio
   pythonfmu / native (goal: >= 2), and the same for the stepping loop alone
-  (``run_body``, timed inside the run);
+  (``step_body_fmus``, timed inside the run);
 * that both give the same prediction (largest difference, m/s²);
-* the cost of one tire-step through fmpy (setReal of 6 inputs, getReal of the
-  force, doStep) of each backend, in a bare loop;
-* where the time goes (one cProfile run each): the master in Python, fmpy's
-  wrappers around the FMI calls, the FMI calls themselves (for a pythonfmu FMU
-  this includes the Python slave it runs) and opening/closing the FMUs.
+* the cost of one tire-step (fmi2SetReal of 6 inputs, fmi2GetReal of the
+  force, fmi2DoStep) of each backend in a bare loop: through fmpy's wrappers,
+  through the master's callbacks, and the FMI calls alone (as the stepping loop
+  makes them, inline; for a pythonfmu FMU this includes the Python slave it
+  runs), the last times the run's tire-steps splitting the stepping loop into
+  FMI calls and the master in Python;
+* where the time goes (one cProfile run each): the stepping loop, opening and
+  closing the FMUs, fmpy's wrappers (set-up only) and the rest (problem
+  set-up, reading the laws, equilibrium, low-pass, prediction).
 
 Prints the figures; it is not a test.  Usage::
 
@@ -24,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import cProfile
+import ctypes
 import json
 import pstats
 import statistics
@@ -36,23 +41,23 @@ import numpy as np
 
 from build_scripts import build_fmu
 from identification import tractor_cosim
-from identification.cosim import TireFmu
+from identification.cosim import TireFmu, step_fn
 from identification.diagnose.command import run_tractor_diagnosis
 from identification.recording import read_recording
 from identification.rig import run_rig, write_run
 from identification.tractor_cosim import simulate_tractor
 
 BACKENDS = ("native", "pythonfmu")
-#: Wall time (s) of each call of the master's stepping loop (``run_body``) inside ``simulate_tractor``.
+#: Wall time (s) of each call of the master's stepping loop (``step_body_fmus``) inside ``simulate_tractor``.
 STEPPING: list = []
 
 
-def _timed_run_body(run_body):
-    """`run_body` that appends its wall time to :data:`STEPPING` (the stepping part of a run, FMUs open)."""
+def _timed_stepping(step_body_fmus):
+    """`step_body_fmus` that appends its wall time to :data:`STEPPING` (the stepping part of a run, FMUs open)."""
     def timed(*args, **kwargs):
         start = time.perf_counter()
         try:
-            return run_body(*args, **kwargs)
+            return step_body_fmus(*args, **kwargs)
         finally:
             STEPPING.append(time.perf_counter() - start)
     return timed
@@ -68,22 +73,44 @@ def build_set(fit, folder: Path, backend: str) -> dict:
     return paths
 
 
-def tire_step_seconds(path: Path, n: int = 20000) -> float:
-    """Wall time of one tire-step through fmpy (the master's force callback, then doStep), bare loop."""
+def tire_step_seconds(path: Path, n: int = 20000) -> dict:
+    """Wall time of one tire-step (set the 6 inputs, get the force, doStep), bare loop: {"fmpy": through fmpy's
+    setReal/getReal/doStep, "callbacks": through TireFmu.force_fn and step_fn, "fmi": the calls alone, inline}."""
+    out = {}
     with TireFmu(path, instance_name="bench") as tire:
         tire.initialize(0.0)
-        force, do_step = tire.force_fn(), tire.slave.doStep
         z = tire.parameters()["unloaded_radius"] - 0.03
+        s, in_vrs, f_vrs = tire.slave, tire.input_vrs, tire.force_vr
         start = time.perf_counter()
         for i in range(n):
+            s.setReal(in_vrs, [z + 1e-6 * (i & 63), 0.0, 0.0, 0.0, 0.0, 0.0])
+            s.getReal(f_vrs)
+            s.doStep(i * 1e-3, 1e-3)
+        out["fmpy"] = (time.perf_counter() - start) / n
+        force, do_steps = tire.force_fn(), step_fn([tire])
+        start = time.perf_counter()
+        for i in range(n, 2 * n):
             force(z + 1e-6 * (i & 63), 0.0, 0.0, 0.0, 0.0, 0.0)
-            do_step(i * 1e-3, 1e-3)
-        return (time.perf_counter() - start) / n
+            do_steps(i * 1e-3, 1e-3)
+        out["callbacks"] = (time.perf_counter() - start) / n
+        set_real, get_real, c, vrs, n_in, values, f_vr, one, value = tire.exchange_args()
+        do_step = tire._raw.do_step  # as step_fn calls it
+        t_now, size, true = ctypes.c_double(), ctypes.c_double(1e-3), ctypes.c_int(1)
+        start = time.perf_counter()
+        for i in range(2 * n, 3 * n):
+            values[:] = (z + 1e-6 * (i & 63), 0.0, 0.0, 0.0, 0.0, 0.0)
+            set_real(c, vrs, n_in, values)
+            get_real(c, f_vr, one, value)
+            t_now.value = i * 1e-3
+            do_step(c, t_now, size, true)
+        out["fmi"] = (time.perf_counter() - start) / n
+    return out
 
 
 def profile_split(paths, rec, doc) -> dict:
-    """Seconds of one profiled ``simulate_tractor`` run: the FMI calls, fmpy's wrappers around them, opening and
-    closing the FMUs, and the rest (the master in Python: problem set-up, low-pass, equilibrium, stepping)."""
+    """Seconds of one profiled ``simulate_tractor`` run: the stepping loop (the master and the FMI calls it makes
+    inline), opening and closing the FMUs, fmpy's setReal/getReal/doStep wrappers (set-up) and the rest (problem
+    set-up, reading the laws, equilibrium, low-pass, prediction)."""
     profiler = cProfile.Profile()
     profiler.enable()
     simulate_tractor(paths, rec, doc)
@@ -94,12 +121,12 @@ def profile_split(paths, rec, doc) -> dict:
         return sum(v[3] for k, v in stats.items() if k[2] == name and file_part in k[0])
 
     total = cumulative("simulate_tractor", "tractor_cosim")
-    fmi = cumulative("_call", "fmpy")  # the ctypes call into the FMU (and, for pythonfmu, its Python slave)
+    stepping = cumulative("step_body_fmus", "tractor_cosim")
     wrappers = sum(cumulative(n, "fmpy") for n in ("setReal", "getReal", "doStep"))
     # TireFmu: read the model description, extract, instantiate; close: free, remove the folder
     opening = cumulative("__init__", "identification/cosim.py") + cumulative("close", "identification/cosim.py")
-    return {"total": total, "fmi": fmi, "fmpy": wrappers - fmi, "open": opening,
-            "master": total - wrappers - opening,
+    return {"total": total, "stepping": stepping, "open": opening, "fmpy": wrappers,
+            "rest": total - stepping - opening - wrappers,
             "calls": {n: sum(v[1] for k, v in stats.items() if k[2] == n and "fmpy" in k[0])
                       for n in ("setReal", "getReal", "doStep")}}
 
@@ -123,7 +150,7 @@ def main(argv=None) -> int:
         sets = {b: build_set(diag.final, folder / b, b) for b in BACKENDS}
         results = {b: simulate_tractor(sets[b], rec, doc) for b in BACKENDS}  # warm-up (imports, extraction)
         times, stepping = {b: [] for b in BACKENDS}, {b: [] for b in BACKENDS}
-        tractor_cosim.run_body = _timed_run_body(tractor_cosim.run_body)
+        tractor_cosim.step_body_fmus = _timed_stepping(tractor_cosim.step_body_fmus)
         for _ in range(args.rounds):
             for b in BACKENDS:
                 t = time.perf_counter()
@@ -134,32 +161,36 @@ def main(argv=None) -> int:
         print(f"simulate_tractor, 4 extended tire FMUs, step {results['native'].step_s * 1e3:g} ms "
               f"(~{steps} steps over the recording), {args.rounds} rounds:")
         for b in BACKENDS:
-            print(f"  {b:<10} median {statistics.median(times[b]):6.2f} s  (min {min(times[b]):.2f}, "
-                  f"max {max(times[b]):.2f})")
+            print(f"  {b:<10} median {statistics.median(times[b]):6.3f} s  (min {min(times[b]):.3f}, "
+                  f"max {max(times[b]):.3f})")
         ratio = statistics.median(times["pythonfmu"]) / statistics.median(times["native"])
         print(f"  ratio pythonfmu / native: {ratio:.2f}x (goal >= 2)")
-        print("  of which the stepping loop alone (run_body: master, fmpy and FMI calls, FMUs open): "
-              + ", ".join(f"{b} {statistics.median(stepping[b]):.3f} s" for b in BACKENDS)
-              + f", ratio {statistics.median(stepping['pythonfmu']) / statistics.median(stepping['native']):.2f}x")
+        step_median = {b: statistics.median(stepping[b]) for b in BACKENDS}
+        print("  of which the stepping loop alone (step_body_fmus: master and FMI calls, FMUs open): "
+              + ", ".join(f"{b} {step_median[b]:.3f} s" for b in BACKENDS)
+              + f", ratio {step_median['pythonfmu'] / step_median['native']:.2f}x")
         diff = max(float(np.max(np.abs(results["native"].predicted[c] - results["pythonfmu"].predicted[c])))
                    for c in results["native"].channels)
         print(f"  same prediction: largest difference {diff:.2e} m/s²; NRMSE native "
               + ", ".join(f"{c} {results['native'].nrmse[c]:.4f}" for c in results["native"].channels))
         per_step = {b: tire_step_seconds(sets[b]["FL"]) for b in BACKENDS}
-        print("one tire-step through fmpy (set 6 inputs, get the force, doStep), bare loop: "
-              + ", ".join(f"{b} {per_step[b] * 1e6:.1f} us" for b in BACKENDS)
-              + f"; x {4 * steps} tire-steps per run: "
-              + ", ".join(f"{b} {per_step[b] * 4 * steps:.3f} s" for b in BACKENDS))
+        print("one tire-step (set 6 inputs, get the force, doStep), bare loop:")
+        for way, label in (("fmpy", "through fmpy's wrappers"), ("callbacks", "through the master's callbacks"),
+                           ("fmi", "the FMI calls alone, inline")):
+            print(f"  {label:<31} " + ", ".join(f"{b} {per_step[b][way] * 1e6:5.2f} us" for b in BACKENDS))
+        print(f"  stepping loop = its FMI calls ({4 * steps} tire-steps x the last) + the master in Python: "
+              + ", ".join(f"{b} {per_step[b]['fmi'] * 4 * steps:.3f} s + "
+                          f"{step_median[b] - per_step[b]['fmi'] * 4 * steps:.3f} s" for b in BACKENDS))
         print("where the time goes (one cProfile run each; profiling slows the Python parts):")
-        columns = ("total", "master", "fmpy", "fmi", "open")
-        print(f"  {'':<10} " + " ".join(f"{c:>7}" for c in ("total", "master", "fmpy", "FMI", "open")) + "  calls")
+        columns = ("total", "stepping", "open", "fmpy", "rest")
+        print(f"  {'':<10} " + " ".join(f"{c:>8}" for c in columns) + "  fmpy wrapper calls")
         for b in BACKENDS:
             split = profile_split(sets[b], rec, doc)
-            print(f"  {b:<10} " + " ".join(f"{split[c]:6.2f}s" for c in columns) + "  "
+            print(f"  {b:<10} " + " ".join(f"{split[c]:7.3f}s" for c in columns) + "  "
                   + ", ".join(f"{n} {c}" for n, c in split["calls"].items()))
-        print("  master: the co-simulation master in Python (problem set-up, low-pass, equilibrium, stepping); "
-              "fmpy: its setReal/getReal/doStep wrappers; FMI: the calls into the FMUs; open: extracting, "
-              "instantiating and freeing the FMUs")
+        print("  stepping: the stepping loop (the master and the FMI calls it makes inline); open: extracting, "
+              "instantiating and freeing the FMUs; fmpy: its setReal/getReal/doStep wrappers (set-up); rest: "
+              "problem set-up, reading the laws, equilibrium, low-pass, prediction")
     return 0
 
 

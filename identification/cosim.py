@@ -37,6 +37,7 @@ must.
 
 from __future__ import annotations
 
+import ctypes
 import shutil
 import tempfile
 import time
@@ -48,7 +49,7 @@ import numpy as np
 from .errors import InputError
 from .scheme import Trajectory, cleat_grid, lug_steady_state, run_corner, run_half_tractor, tire_inputs
 
-__all__ = ["TireFmu", "run_quarter_tractor", "run_half_tractor_fmus"]
+__all__ = ["TireFmu", "step_fn", "run_quarter_tractor", "run_half_tractor_fmus"]
 
 #: Names of the tire FMU's interface (inputs, parameters, output); the
 #: longitudinal inputs exist only in tires that know the cleat themselves.
@@ -60,6 +61,10 @@ FORCE = "force_z"
 
 class TireFmu:
     """An instantiated tire FMU (fmpy ``FMU2Slave``), usable as a context manager.
+
+    Set-up, parameters and closing go through fmpy; the per-step exchange
+    (:meth:`force_fn`, :func:`step_fn`) calls the FMU's ``fmi2SetReal``,
+    ``fmi2GetReal`` and ``fmi2DoStep`` directly, on arrays allocated once.
 
     Parameters
     ----------
@@ -90,7 +95,7 @@ class TireFmu:
         self.path = path
         self.longitudinal = all(n in self.vr for n in LONGITUDINAL)
         self._dir = tempfile.mkdtemp(prefix="cleatfmu_fmu_")
-        extract(str(path), self._dir)
+        extract(str(path), self._dir, include=_loaded_member)
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=instance_name)
         self.slave.instantiate()
@@ -98,9 +103,15 @@ class TireFmu:
         self._start_values = dict(start_values or {})
         self.input_vrs = [self.vr[n] for n in INPUTS + (LONGITUDINAL if self.longitudinal else ())]
         self.force_vr = [self.vr[FORCE]]
+        self._raw = _RawFmi2(self.slave, self.input_vrs, self.force_vr[0])
 
     def initialize(self, t0: float) -> None:
+        """Set the start values and initialize at `t0`; an initialized instance is reset first (``fmi2Reset``:
+        every variable back to its start value), so it starts afresh as a new instance would."""
         s = self.slave
+        if self._initialized:
+            self._initialized = False
+            s.reset()
         s.setupExperiment(startTime=t0)
         if self._start_values:
             reals = {n: v for n, v in self._start_values.items() if not isinstance(v, bool)}
@@ -136,21 +147,32 @@ class TireFmu:
                            x_offset_m=params.get("cleat_x", 0.0))
 
     def force_fn(self):
-        """The force callback of :mod:`identification.scheme` (one setReal and one getReal)."""
-        set_real, get_real, in_vrs, f_vrs = self.slave.setReal, self.slave.getReal, self.input_vrs, self.force_vr
-        if self.longitudinal:
-            def force(z, vz, x, vx, road_z, road_vz):
-                set_real(in_vrs, [z, vz, road_z, road_vz, x, vx])
-                return get_real(f_vrs)[0]
-        else:
-            def force(z, vz, x, vx, road_z, road_vz):
-                set_real(in_vrs, [z, vz, road_z, road_vz])
-                return get_real(f_vrs)[0]
+        """The force callback of :mod:`identification.scheme`: ``force(z, vz, x, vx, road_z, road_vz) -> N``,
+        one ``fmi2SetReal`` of the inputs and one ``fmi2GetReal`` of the force (a non-longitudinal tire
+        ignores x and vx)."""
+        set_real, get_real, c, vrs, n_in, values, f_vr, one, out = self.exchange_args()
+
+        def force(z, vz, x, vx, road_z, road_vz):
+            values[:] = (z, vz, road_z, road_vz, x, vx)
+            status = set_real(c, vrs, n_in, values)
+            if status > _WARNING:
+                raise fmi_error("fmi2SetReal", status)
+            status = get_real(c, f_vr, one, out)
+            if status > _WARNING:
+                raise fmi_error("fmi2GetReal", status)
+            return out[0]
         return force
+
+    def exchange_args(self) -> tuple:
+        """What :meth:`force_fn` calls, for a master making the calls inline: (fmi2SetReal, fmi2GetReal,
+        component, input value references, their number, input values (6: z, vz, road_z, road_vz, x, vx),
+        force value reference, 1, force value), the functions to be called with these ctypes objects only."""
+        return self._raw.exchange
 
     def close(self) -> None:
         """Terminate (if initialized; FMI refuses terminate before that) and free the instance."""
         if self.slave is not None:
+            self._raw = None  # the FMU's functions go with its library
             try:
                 if self._initialized:
                     self.slave.terminate()
@@ -166,6 +188,60 @@ class TireFmu:
         self.close()
 
 
+def step_fn(tires):
+    """``do_steps(t_n, h)``: one ``fmi2DoStep(t_n, h)`` of each tire, in order (the ``before_step`` callback)."""
+    calls = [(t._raw.do_step, t._raw.component) for t in tires]
+    t_now, size, true = ctypes.c_double(), ctypes.c_double(), ctypes.c_int(1)
+
+    def do_steps(t_n, h):
+        t_now.value = t_n
+        size.value = h
+        for do_step, c in calls:
+            status = do_step(c, t_now, size, true)
+            if status > _WARNING:
+                raise fmi_error("fmi2DoStep", status)
+    return do_steps
+
+
+#: fmi2Warning: a larger status is a failed call (as fmpy's wrappers judge it).
+_WARNING = 1
+#: The FMU's own functions with the return type only: called with every argument a ctypes object of the
+#: C type (fmi2Component, arrays, size_t, fmi2Real, fmi2Boolean), so ctypes converts nothing per call.
+_FMI_CALL = ctypes.CFUNCTYPE(ctypes.c_int)
+
+
+def fmi_error(function: str, status: int) -> Exception:
+    """fmpy's error for a failed FMI call (status above fmi2Warning)."""
+    from fmpy.fmi1 import FMICallException
+
+    return FMICallException(function=function, status=status)
+
+
+class _RawFmi2:
+    """The per-step FMI 2 calls of one instance: its functions, component and preallocated arrays."""
+
+    def __init__(self, slave, input_vrs, force_vr: int):
+        def function(name):
+            return _FMI_CALL(ctypes.cast(getattr(slave.dll, name), ctypes.c_void_p).value)
+
+        self.component = ctypes.c_void_p(slave.component)
+        self.do_step = function("fmi2DoStep")
+        n = len(input_vrs)
+        values = (ctypes.c_double * 6)()  # x and vx are written even when a tire has no longitudinal inputs
+        self.exchange = (function("fmi2SetReal"), function("fmi2GetReal"), self.component,
+                         (ctypes.c_uint * n)(*input_vrs), ctypes.c_size_t(n), values,
+                         (ctypes.c_uint * 1)(force_vr), ctypes.c_size_t(1), (ctypes.c_double * 1)())
+
+
+def _loaded_member(name: str) -> bool:
+    """The archive members an instance needs: all but the sources, the documentation and other platforms'
+    binaries (fmpy loads ``binaries/<platform>/``; FMI 3 names the platform as a tuple)."""
+    from fmpy import platform, platform_tuple
+
+    top, _, rest = name.partition("/")
+    if top in ("sources", "documentation"):
+        return False
+    return top != "binaries" or rest.partition("/")[0] in (platform, platform_tuple)
 
 
 def _check_run(max_step_s, duration_s, speed_m_s):
@@ -223,7 +299,7 @@ def run_quarter_tractor(fmu_path, *, mass_kg: float, speed_m_s: float, cleat_hei
         wall = time.perf_counter()
         traj = run_corner(tire.force_fn(), mass_kg=mass_kg, start_s=start, step_s=h, n=n, inputs=inputs,
                           unloaded_radius_m=params["unloaded_radius"], stiffness_guess_n_m=params["stiffness"],
-                          before_step=tire.slave.doStep, initial_offset=offset)
+                          before_step=step_fn([tire]), initial_offset=offset)
         wall = time.perf_counter() - wall
     if not np.all(np.isfinite(traj.force_n)):
         raise InputError(fmu_path, "the co-simulation diverged (non-finite tire force)")
@@ -253,10 +329,6 @@ def run_half_tractor_fmus(fmu_paths, *, loads_n, wheelbase_m: float, dynamic_ind
                            cleat_height_m=cleat_height_m, cleat_width_m=cleat_width_m)
                   for t, lag in zip(tires, (0.0, delay))]
 
-        def do_steps(t_n, step):
-            front.slave.doStep(t_n, step)
-            rear.slave.doStep(t_n, step)
-
         offset = ((0.0, 0.0), (0.0, 0.0))
         if params[0].get("lug_amplitude", 0.0) or params[1].get("lug_amplitude", 0.0):
             offset = lug_steady_state(
@@ -271,7 +343,7 @@ def run_half_tractor_fmus(fmu_paths, *, loads_n, wheelbase_m: float, dynamic_ind
         traj = run_half_tractor([t.force_fn() for t in tires], loads_n=loads_n, wheelbase_m=wheelbase_m,
                                 dynamic_index=dynamic_index, start_s=start, step_s=h, n=n, inputs=inputs,
                                 unloaded_radii_m=[p["unloaded_radius"] for p in params],
-                                stiffness_guesses_n_m=[p["stiffness"] for p in params], before_step=do_steps,
+                                stiffness_guesses_n_m=[p["stiffness"] for p in params], before_step=step_fn(tires),
                                 initial_offset=offset)
         wall = time.perf_counter() - wall
     if not np.all(np.isfinite(traj.force_n)):

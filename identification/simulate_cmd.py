@@ -106,7 +106,8 @@ def _save_plot(fig, path) -> None:
 
 def _run_tractor(args) -> int:
     from .recording import read_recording
-    from .tractor_cosim import simulate_tractor, tractor_fmu_paths
+    from .simulate_inputs import tractor_fmu_paths
+    from .tractor_cosim import simulate_tractor
 
     if args.tire is not None:
         raise InputError("--tire", "the whole-tractor form compares all four channels; --tire is for one FMU")

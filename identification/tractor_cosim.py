@@ -6,7 +6,9 @@ The master takes the body, the cleat and the arrivals from the model record
 compiled - reading each wheel's force from its FMU (one ``doStep`` per FMU
 per step, one ``setReal``/``getReal`` per force).  Before the first step it
 finds each tire's static height itself, from the FMU's force (as an importer
-whose body includes gravity must).
+whose body includes gravity must).  fmpy loads and sets up the FMUs; the
+stepping (:func:`step_body_fmus`) calls the FMUs' functions itself, with
+arguments allocated once, and skips J's zero entries.
 
 :func:`simulate_tractor` is ``cleatfmu simulate FL.fmu FR.fmu RL.fmu RR.fmu
 REC.csv --body DIAG.json``: four tire FMUs under the body a whole-tractor
@@ -16,67 +18,178 @@ arrivals), compared with every channel of a recording.
 
 from __future__ import annotations
 
-import json
-import math
 import tempfile
 import time
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .cosim import TireFmu
+from .cosim import TireFmu, fmi_error, step_fn
 from .diagnose.joint_fit import UNEXPLAINED_RATIO
 from .errors import InputError
 from .model import Cleat, TractorModel
-from .model.stepping import run_body
+from .model.stepping import trajectory_from_arrays
 from .preprocess import DEFAULT_CUTOFF_HZ, lowpass
 from .recording import TIRES
 from .scheme import Trajectory, _equilibrium_corner
+from .simulate_inputs import body_settings, read_body_document, tractor_fmu_paths
 
-__all__ = ["run_tractor_fmus", "TractorGain", "measure_tractor_gain", "build_tractor_fmus", "tractor_fmu_paths",
-           "read_body_document", "TractorSimulation", "simulate_tractor", "UNEXPLAINED_RATIO"]
+__all__ = ["run_tractor_fmus", "step_body_fmus", "TractorGain", "measure_tractor_gain", "build_tractor_fmus",
+           "TractorSimulation", "simulate_tractor", "UNEXPLAINED_RATIO"]
 
 
-def run_tractor_fmus(fmu_paths, record: TractorModel, *, start_s: float, step_s: float, n: int) -> Trajectory:
-    """Co-simulate the record's body on one tire FMU per wheel (paths in the record's tire order).
+def run_tractor_fmus(fmus, record: TractorModel, *, start_s: float, step_s: float, n: int) -> Trajectory:
+    """Co-simulate the record's body on one tire FMU per wheel (in the record's tire order).
 
-    The FMUs carry their own parameters (an extended tire FMU with a built-in
-    cleat places the cleat itself from the hub's longitudinal position).
+    `fmus` are paths (each FMU is opened here and closed after the run) or
+    open :class:`~identification.cosim.TireFmu` instances (initialized afresh
+    at `start_s` here, left open).  The FMUs carry their own parameters (an
+    extended tire FMU with a built-in cleat places the cleat itself from the
+    hub's longitudinal position).
     """
-    paths = [Path(p) for p in fmu_paths]
-    if len(paths) != len(record.tires):
-        raise ValueError(f"one FMU per tire is needed ({len(record.tires)}), got {len(paths)}")
+    fmus = [f if isinstance(f, TireFmu) else Path(f) for f in fmus]
+    if len(fmus) != len(record.tires):
+        raise ValueError(f"one FMU per tire is needed ({len(record.tires)}), got {len(fmus)}")
     J, mass, _ = record.body.matrices()
     inputs = record.inputs(start_s, step_s, n)
     loads = np.array([p["static_load"] for p in record.laws], dtype=float)
-    tires = []
-    try:
-        for path, name in zip(paths, record.tires):
-            tires.append(TireFmu(path, instance_name=name))
-        forces, static = [], []
+    with ExitStack() as stack:
+        tires = [f if isinstance(f, TireFmu) else stack.enter_context(TireFmu(f, instance_name=name))
+                 for f, name in zip(fmus, record.tires)]
+        static = []
         for i, tire in enumerate(tires):
             tire.initialize(start_s)
             params = tire.parameters()
-            force = tire.force_fn()
-            forces.append(force)
-            x0 = float(inputs.hub_x[i, 0])
+            force, x0 = tire.force_fn(), float(inputs.hub_x[i, 0])
             static.append(_equilibrium_corner(lambda z, f=force, x=x0: f(z, 0.0, x, 0.0, 0.0, 0.0), loads[i],
                                               params["unloaded_radius"], loads[i] / params["stiffness"]))
         q0, dq0 = record.initial_state(start_s, inputs.hub_x[:, 0], inputs.hub_vx[:, 0])
-
-        def do_steps(t_n, h):
-            for tire in tires:
-                tire.slave.doStep(t_n, h)
-
-        traj = run_body(forces, J=J, mass=mass, static_z=np.array(static), loads_n=loads, inputs=inputs,
-                        start_s=start_s, step_s=step_s, q0=q0, dq0=dq0, before_step=do_steps)
-    finally:
-        for tire in tires:
-            tire.close()
-    if not np.all(np.isfinite(traj.force_n)):
-        raise InputError(paths[0], "the co-simulation diverged (non-finite tire force)")
+        traj = step_body_fmus(tires, J=J, mass=mass, static_z=np.array(static), loads_n=loads, inputs=inputs,
+                              start_s=start_s, step_s=step_s, q0=q0, dq0=dq0)
+    if not all(np.all(np.isfinite(a)) for a in (traj.force_n, traj.hub_z_m, traj.hub_vz_m_s)):
+        raise InputError(tires[0].path, "the co-simulation diverged (non-finite tire force or hub motion)")
     return traj
+
+
+def step_body_fmus(tires, *, J, mass, static_z, loads_n, inputs, start_s: float, step_s: float, q0,
+                   dq0) -> Trajectory:
+    """:func:`identification.model.stepping.run_body` on open, initialized tire FMUs, the FMI calls inline.
+
+    The same operations in the same order, so the same trajectory (tested
+    against ``run_body`` with the FMUs' force callbacks); per step one
+    ``fmi2DoStep`` of every FMU, then one ``fmi2SetReal`` of the inputs and one
+    ``fmi2GetReal`` of the force of each tire (two at a point-contact edge).
+    Faster: the products with J's zero entries, exact zeros, are skipped (a
+    body of independent corners has one non-zero entry per row), the steps'
+    values are kept in lists, and each tire's FMI arguments are allocated once.
+    """
+    J = np.asarray(J, dtype=float)
+    nt, nq = J.shape
+    Jl = J.tolist()
+    rows = [[(j, Jl[t][j]) for j in range(nq) if Jl[t][j] != 0.0] for t in range(nt)]
+    cols = [[(t, Jl[t][j]) for t in range(nt) if Jl[t][j] != 0.0] for j in range(nq)]
+    minv = (1.0 / np.asarray(mass, dtype=float)).tolist()
+    zs = [float(v) for v in static_z]
+    W = [float(v) for v in loads_n]
+    rz, rv, hx, hv = (a.tolist() for a in (inputs.road_z, inputs.road_vz, inputs.hub_x, inputs.hub_vx))
+    n = len(rz[0])
+    h = float(step_s)
+    hh, hh2 = 0.5 * h, 0.5 * h * h
+    q = [float(v) for v in q0]
+    dq = [float(v) for v in dq0]
+    Z, V, F, A = ([[0.0] * n for _ in range(nt)] for _ in range(4))
+    points = inputs.edge_points.tolist()
+    jumps = np.zeros((len(points), nt, nt))
+    forces = [tire.force_fn() for tire in tires]
+    do_steps = step_fn(tires)
+    f = [0.0] * nt
+    fs = [0.0] * nt
+    for t in range(nt):
+        zt, vt = zs[t], 0.0
+        for j, Jtj in rows[t]:
+            zt += Jtj * q[j]
+            vt += Jtj * dq[j]
+        f[t] = forces[t](zt, vt, hx[t][0], hv[t][0], rz[t][0], rv[t][0])
+        Z[t][0], V[t][0], F[t][0] = zt, vt, f[t]
+    ddq = [0.0] * nq
+    for j in range(nq):
+        s = 0.0
+        for t, Jtj in cols[j]:
+            s += Jtj * (f[t] - W[t])
+        ddq[j] = minv[j] * s
+    for t in range(nt):
+        s = 0.0
+        for j, Jtj in rows[t]:
+            s += Jtj * ddq[j]
+        A[t][0] = s
+    # per tire: its index, static height, row of J, inputs, FMI exchange (see TireFmu.force_fn) and outputs
+    per_tire = [(t, zs[t], rows[t], rz[t], rv[t], hx[t], hv[t], *tire.exchange_args(), Z[t])
+                for t, tire in enumerate(tires)]
+    columns = list(zip(range(nq), cols, minv))
+    jq = no_jump = (0.0,) * nq
+    q1 = [0.0] * nq
+    dqp = [0.0] * nq
+    edge = 0
+    for i in range(1, n):
+        for j in range(nq):
+            q1[j] = q[j] + h * dq[j] + hh2 * ddq[j]
+            dqp[j] = dq[j] + h * ddq[j] - 0.5 * jq[j]
+        do_steps(start_s + (i - 1) * h, h)
+        any_edge = False
+        for t, zt, row, rz_t, rv_t, hx_t, hv_t, set_real, get_real, c, vrs, n_in, values, f_vr, one, out, Z_t \
+                in per_tire:
+            vt = 0.0
+            for j, Jtj in row:
+                zt += Jtj * q1[j]
+                vt += Jtj * dqp[j]
+            if rv_t[i] != 0.0:
+                any_edge = True
+                fs[t] = forces[t](zt, vt, hx_t[i], hv_t[i], rz_t[i], 0.0)
+                f[t] = forces[t](zt, vt, hx_t[i], hv_t[i], rz_t[i], rv_t[i])
+            else:
+                values[:] = (zt, vt, rz_t[i], 0.0, hx_t[i], hv_t[i])
+                status = set_real(c, vrs, n_in, values)
+                if status > 1:  # above fmi2Warning: failed
+                    raise fmi_error("fmi2SetReal", status)
+                status = get_real(c, f_vr, one, out)
+                if status > 1:
+                    raise fmi_error("fmi2GetReal", status)
+                f[t] = fs[t] = out[0]
+            Z_t[i] = zt
+        jq = no_jump
+        if any_edge:
+            jq = [0.0] * nq
+            for j in range(nq):
+                s = 0.0
+                for t in range(nt):
+                    s += Jl[t][j] * (f[t] - fs[t])
+                jq[j] = h * minv[j] * s
+            for src in range(nt):
+                for hub in range(nt):
+                    s = 0.0
+                    for j in range(nq):
+                        s += Jl[hub][j] * (h * minv[j] * (Jl[src][j] * (f[src] - fs[src])))
+                    jumps[edge, src, hub] = s
+            edge += 1
+        for j, col, minv_j in columns:
+            s = 0.0
+            for t, Jtj in col:
+                s += Jtj * (f[t] - W[t])
+            ddq1 = minv_j * s
+            dq[j] = dq[j] + hh * (ddq[j] + ddq1)
+            q[j] = q1[j]
+            ddq[j] = ddq1
+        for t, row in enumerate(rows):
+            vt = 0.0
+            at = 0.0
+            for j, Jtj in row:
+                vt += Jtj * dq[j]
+                at += Jtj * ddq[j]
+            V[t][i], F[t][i], A[t][i] = vt, f[t], at
+    return trajectory_from_arrays(*(np.array(X) for X in (Z, V, F, A)), jumps, inputs=inputs, start_s=start_s,
+                                  step_s=h, static_z=static_z)
 
 
 def build_tractor_fmus(fit, directory, stem: str, *, description_prefix: str = "") -> list[Path]:
@@ -155,133 +268,9 @@ def measure_tractor_gain(diag, fmu_dir=None, *, stem: str | None = None) -> Trac
 # ---------------------------------------------------------------------------------------------------------------
 # cleatfmu simulate FL.fmu FR.fmu RL.fmu RR.fmu REC.csv --body DIAG.json
 
-def _tire_suffix(path: Path):
-    """The tire a file name ends with (``*_FL.fmu``), or None."""
-    name = path.name
-    return next((t for t in TIRES if name.endswith(f"_{t}.fmu")), None)
-
-
-def tractor_fmu_paths(paths) -> dict:
-    """The FMU of each tire, {FL, FR, RL, RR: Path}, from one directory or four paths.
-
-    A directory must hold exactly one ``*_FL.fmu``, ``*_FR.fmu``, ``*_RL.fmu``
-    and ``*_RR.fmu`` (as ``cleatfmu diagnose --fmu-dir`` writes them).  Four
-    paths are matched by the same suffixes when each tire's is there once,
-    else taken in FL, FR, RL, RR order (a path whose suffix names another
-    tire than its place is refused).
-    """
-    paths = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
-    if len(paths) == 1 and paths[0].is_dir():
-        folder = paths[0]
-        found = {t: sorted(p.name for p in folder.glob(f"*_{t}.fmu") if p.is_file()) for t in TIRES}
-        missing = [f"*_{t}.fmu" for t in TIRES if not found[t]]
-        several = [f"{len(found[t])} *_{t}.fmu ({', '.join(found[t])})" for t in TIRES if len(found[t]) > 1]
-        if missing or several:
-            problems = ([f"no {', '.join(missing)}"] if missing else []) + \
-                       ([f"several: {'; '.join(several)}"] if several else [])
-            raise InputError(folder, "needs exactly one *_FL.fmu, *_FR.fmu, *_RL.fmu and *_RR.fmu: "
-                             + "; ".join(problems))
-        return {t: folder / found[t][0] for t in TIRES}
-    if len(paths) != len(TIRES):
-        raise InputError(None, f"give one tire FMU, four (FL FR RL RR) or one directory holding them, "
-                               f"got {len(paths)} path(s)")
-    tags = [_tire_suffix(p) for p in paths]
-    if sorted(t for t in tags if t) == sorted(TIRES):
-        return {t: p for t, p in zip(tags, paths)}
-    for tire, tag, p in zip(TIRES, tags, paths):
-        if tag is not None and tag != tire:
-            raise InputError(p, f"named for {tag} but given in the place of {tire}: give each tire's FMU once, "
-                                f"named *_FL.fmu .. *_RR.fmu, or the four in FL, FR, RL, RR order")
-    return dict(zip(TIRES, paths))
-
-
-def _key(doc, keys: str, source):
-    """doc[k1][k2]... or InputError naming the missing key."""
-    node = doc
-    for i, k in enumerate(keys.split(".")):
-        if not isinstance(node, dict) or k not in node:
-            raise InputError(source, f"not a 'cleatfmu diagnose --json' whole-tractor document: missing key "
-                                     f"{'.'.join(keys.split('.')[:i + 1])}")
-        node = node[k]
-    return node
-
-
-def _number(value, keys: str, source) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise InputError(source, f"{keys} must be a finite number, got {value!r}")
-    return float(value)
-
-
-def read_body_document(source) -> dict:
-    """Read a ``diagnose --json`` document (path) as a dict; InputError naming the file when unreadable."""
-    try:
-        text = Path(source).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(source, "no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(source, f"cannot read: {getattr(exc, 'strerror', None) or exc}") from None
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(source, f"not JSON ({exc.msg} at line {exc.lineno})") from None
-    if not isinstance(doc, dict):
-        raise InputError(source, "not a 'cleatfmu diagnose --json' whole-tractor document (not a JSON object)")
-    return doc
-
-
-def _body_settings(doc: dict, source) -> dict:
-    """The body, effects and arrivals of a ``diagnose --json`` document (validated)."""
-    from .diagnose.tractor import BODY_EFFECTS, EFFECTS, TIRE_EFFECTS
-
-    body = _key(doc, "body", source)
-    indices = {}
-    for name in ("pitch_index", "roll_index"):
-        entry = _key(doc, f"body.{name}", source)
-        if entry is not None:
-            indices[name] = _number(_key(doc, f"body.{name}.value", source), f"body.{name}.value", source)
-    front = _key(doc, "body.front_axle", source)
-    if front not in ("rigid", "pivot"):
-        raise InputError(source, f"body.front_axle must be 'rigid' or 'pivot', got {front!r}")
-    if front == "pivot":
-        entry = _key(doc, "body.pivot_index", source)
-        if entry is None:
-            raise InputError(source, "body.pivot_index is null but body.front_axle is 'pivot'")
-        indices["pivot_index"] = _number(_key(doc, "body.pivot_index.value", source), "body.pivot_index.value",
-                                         source)
-    elif isinstance(body, dict) and body.get("pivot_index") is not None:
-        raise InputError(source, "body.pivot_index is given but body.front_axle is 'rigid'")
-    effects = _key(doc, "effects", source)
-    if not isinstance(effects, list) or not all(isinstance(e, str) for e in effects):
-        raise InputError(source, "effects must be a list of effect names")
-    unknown = [e for e in effects if e not in EFFECTS]
-    if unknown:
-        raise InputError(source, f"unknown effect(s) {', '.join(unknown)} (known: {', '.join(EFFECTS)})")
-    implied = {"axle_coupling": "pitch_index" in indices, "roll_coupling": "roll_index" in indices,
-               "front_axle_pivot": front == "pivot"}
-    absent = {"axle_coupling": "body.pitch_index is null", "roll_coupling": "body.roll_index is null",
-              "front_axle_pivot": "body.front_axle is 'rigid'"}
-    present = {"axle_coupling": "body.pitch_index is given", "roll_coupling": "body.roll_index is given",
-               "front_axle_pivot": "body.front_axle is 'pivot'"}
-    for effect in BODY_EFFECTS:
-        if effect in effects and not implied[effect]:
-            raise InputError(source, f"effects names {effect} but {absent[effect]}")
-        if implied[effect] and effect not in effects:
-            raise InputError(source, f"effects lacks {effect} but {present[effect]}")
-    arrivals = {t: _number(_key(doc, f"tires.{t}.parameters.arrival.value", source),
-                           f"tires.{t}.parameters.arrival.value", source) for t in TIRES}
-    shared = {}
-    for name in ("stagger", "delay"):
-        params = _key(doc, "tires.FL.parameters", source)
-        entry = params.get(name) if isinstance(params, dict) else None
-        if isinstance(entry, dict) and entry.get("value") is not None:
-            shared[name] = _number(entry["value"], f"tires.FL.parameters.{name}.value", source)
-    return {"indices": indices, "front_axle": front, "body_effects": [e for e in BODY_EFFECTS if implied[e]],
-            "tire_effects": [e for e in TIRE_EFFECTS if e in effects], "arrivals": arrivals, "shared": shared,
-            "recording": doc.get("recording")}
-
-
-def _fmu_law(path: Path, static_load: float) -> dict:
-    """The extended tire law an FMU carries, as the model record needs it (cleat handling, lugs, static load).
+def _fmu_law(fmu: TireFmu, static_load: float) -> dict:
+    """The extended tire law an open FMU carries, as the model record needs it (cleat handling, lugs, static
+    load); the FMU is left initialized at t = 0 (the run initializes it afresh).
 
     Parameters the FMU does not have keep the law's defaults; a tire without
     the longitudinal inputs cannot place a cleat itself, so it gets the road.
@@ -290,12 +279,9 @@ def _fmu_law(path: Path, static_load: float) -> dict:
     from .tire_law import EXTENDED_DEFAULTS
 
     law = dict(EXTENDED_DEFAULTS)
-    with TireFmu(path, instance_name="probe") as fmu:
-        fmu.initialize(0.0)
-        params = fmu.parameters()
-        longitudinal = fmu.longitudinal
-    law.update({k: v for k, v in params.items() if k in EXTENDED_DEFAULTS})
-    if not longitudinal:
+    fmu.initialize(0.0)
+    law.update({k: v for k, v in fmu.parameters().items() if k in EXTENDED_DEFAULTS})
+    if not fmu.longitudinal:
         law["cleat_height"] = 0.0
     law["static_load"] = float(static_load)
     return law
@@ -367,7 +353,7 @@ def simulate_tractor(fmu_paths, rec, body_doc, *, cutoff_hz: float = DEFAULT_CUT
         body_source = body_source or str(body_doc)
         body_doc = read_body_document(body_doc)
     source = body_source or "--body"
-    settings = _body_settings(body_doc, source)
+    settings = body_settings(body_doc, source)
     paths = fmu_paths if isinstance(fmu_paths, dict) else tractor_fmu_paths(fmu_paths)
     if sorted(paths) != sorted(TIRES):
         raise InputError(None, f"one FMU per tire FL, FR, RL, RR is needed, got {', '.join(paths) or 'none'}")
@@ -385,11 +371,14 @@ def simulate_tractor(fmu_paths, rec, body_doc, *, cutoff_hz: float = DEFAULT_CUT
         body = model.body(theta)
     except ValueError as exc:
         raise InputError(source, f"not a valid body: {exc}") from None
-    laws = tuple(_fmu_law(paths[t], rec.wheel_load_N[t]) for t in pb.channels)
-    record = TractorModel(body=body, laws=laws, cleat=Cleat(rec.cleat_height_m, rec.cleat_width_m, rec.speed_m_s),
-                          arrivals_s=tuple(settings["arrivals"][t] for t in pb.channels))
-    start, h, n = model.grid(record)
-    traj = run_tractor_fmus([paths[t] for t in pb.channels], record, start_s=start, step_s=h, n=n)
+    with ExitStack() as stack:  # each FMU opened once: its law read, then the run
+        tires = [stack.enter_context(TireFmu(paths[t], instance_name=t)) for t in pb.channels]
+        laws = tuple(_fmu_law(tire, rec.wheel_load_N[t]) for tire, t in zip(tires, pb.channels))
+        record = TractorModel(body=body, laws=laws,
+                              cleat=Cleat(rec.cleat_height_m, rec.cleat_width_m, rec.speed_m_s),
+                              arrivals_s=tuple(settings["arrivals"][t] for t in pb.channels))
+        start, h, n = model.grid(record)
+        traj = run_tractor_fmus(tires, record, start_s=start, step_s=h, n=n)
     predicted = model.predict(theta, trajectory=traj)
     w = pb.window
     noise = {t: float(pb.noise[t] / np.sqrt(np.mean(pb.measured[t][w] ** 2))) for t in pb.channels}
