@@ -1,16 +1,20 @@
 """The whole chain over many recordings: identify, export, co-simulate, diagnose, extend, report.
 
-One job per tire of a recording, spread over the machine's cores:
+One job per tire and one per recording, spread over the machine's cores:
 
-1. **identify** - the paper's method and the waveform fit (k, c with 95 % intervals);
-2. **export** - the point-contact tire FMU with the waveform values (the paper's if the fit fails);
-3. **co-simulate** - the FMU under the corner mass over the recording's cleat, against the measurement;
-4. **diagnose** - the effects the point-contact model misses, the extended model, its FMU(s), and the
-   gain measured by co-simulating them with fmpy;
-5. **figures and FMU validation** - the paper's Figure 9a/9b, the overlays before and after the
-   extension, and ``fmpy.validation.validate_fmu`` of every FMU written.
+1. **identify** (per tire) - the paper's method and the waveform fit (k, c with 95 % intervals);
+2. **export** (per tire) - the point-contact tire FMU (native C) with the waveform values (the paper's if
+   the fit fails);
+3. **co-simulate** (per tire) - the FMU under the corner mass over the recording's cleat, against the
+   measurement;
+4. **diagnose** (per recording) - every channel fitted jointly under one body
+   (:func:`~identification.diagnose.joint_select.diagnose_tractor`): the effects the four-corner model
+   misses, one recommended k, c per tire, what is still unexplained, one extended tire FMU per wheel,
+   and the gain measured by co-simulating them under the body with fmpy;
+5. **figures and FMU validation** - the paper's Figure 9a/9b, the overlays, and
+   ``fmpy.validation.validate_fmu`` of every FMU written.
 
-A recording that cannot be read, or a tire whose stage fails, is recorded with
+A recording that cannot be read, or a stage that fails, is recorded with
 its one-line error; the others go on.  Every stage's wall time is kept.
 """
 
@@ -25,7 +29,7 @@ from pathlib import Path
 from ._files import atomic_write_texts
 from .errors import InputError
 
-__all__ = ["TireReport", "RecordingReport", "BatchResult", "collect_recordings", "run_batch", "STAGES"]
+__all__ = ["TireReport", "DiagnosisReport", "RecordingReport", "BatchResult", "collect_recordings", "run_batch", "STAGES"]
 
 STAGES = ("identify", "export", "co-simulate", "diagnose", "figures", "validate")
 
@@ -39,11 +43,22 @@ class TireReport:
     paper: dict | None = None
     waveform: dict | None = None
     simulate: dict | None = None
-    diagnosis: dict | None = None
     figures: dict = field(default_factory=dict)      # name -> PNG bytes
     fmus: list = field(default_factory=list)         # {"file", "kind", "problems": [...]}
     errors: list = field(default_factory=list)       # "stage: message"
     timings: dict = field(default_factory=dict)      # stage -> s
+
+
+@dataclass
+class DiagnosisReport:
+    """The joint diagnosis of one recording (picklable): the ``diagnose --json`` document and more."""
+
+    recording: str
+    diagnosis: dict | None = None                    # diagnose --json, NRMSEs from the FMU co-simulation
+    figures: dict = field(default_factory=dict)
+    fmus: list = field(default_factory=list)
+    errors: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -55,6 +70,16 @@ class RecordingReport:
     speed_kmh: float | None = None
     sample_rate_hz: float | None = None
     tires: list = field(default_factory=list)        # TireReport, file order
+    diagnosis: DiagnosisReport | None = None
+
+    def recommended(self, tire: str) -> dict | None:
+        """The recommended k, c of a tire: the joint diagnosis's (with its intervals), else None."""
+        d = self.diagnosis.diagnosis if self.diagnosis is not None else None
+        if d is None or tire not in d["tires"]:
+            return None
+        t = d["tires"][tire]
+        return {"k": t["k"], "c": t["c"], "k_ci": t["k_ci"], "c_ci": t["c_ci"], "source": "joint diagnosis",
+                "conditional": t["unexplained"] is not None}
 
 
 @dataclass
@@ -71,6 +96,8 @@ class BatchResult:
         for r in self.recordings:
             for t in r.tires:
                 out += [f"{r.source} {t.tire}: {e}" for e in t.errors]
+            if r.diagnosis is not None:
+                out += [f"{r.source}: {e}" for e in r.diagnosis.errors]
         return out
 
 
@@ -112,12 +139,11 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
     """Run every stage for one tire (called in a worker process)."""
     from .export import export_fmu
     from .identify import identify_paper
-    from .plots import plot_comparison, plot_decay, plot_diagnosis, plot_log_peaks, figure, png_bytes
+    from .plots import plot_comparison, plot_decay, plot_log_peaks, figure, png_bytes
     from .preprocess import preprocess
     from .recording import read_recording
     from .validation import simulate_recording
     from .waveform import identify_waveform
-    from .diagnose.command import run_diagnosis
 
     rep = TireReport(recording=stem, tire=tire)
     fmu_dir = Path(out_dir) / "fmu"
@@ -148,7 +174,7 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
             params_file = Path(out_dir) / "params" / f"{stem}_{tire}.json"
             atomic_write_texts({params_file: json.dumps(params, indent=2) + "\n"})
             try:
-                export_fmu(params_file, fmu_path, tire=tire)
+                export_fmu(params_file, fmu_path, tire=tire, backend="native")
                 rep.fmus.append({"file": f"fmu/{fmu_path.name}", "kind": "point_contact",
                                  "role": "identified point-contact tire"})
             except InputError as exc:
@@ -164,23 +190,35 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
         if cmp is not None:
             with _timed(rep.timings, "figures"):
                 rep.figures["comparison"] = png_bytes(plot_comparison(cmp))
+    with _timed(rep.timings, "validate"):
+        for entry in rep.fmus:
+            entry["problems"] = _validate(Path(out_dir) / entry["file"])
+    return rep
+
+
+def diagnose_recording(csv_path: str, stem: str, out_dir: str) -> DiagnosisReport:
+    """Diagnose every channel of a recording jointly; keep one extended FMU per tire (in a worker process)."""
+    from .diagnose.command import run_tractor_diagnosis
+    from .plots import plot_tractor_diagnosis, png_bytes
+    from .recording import read_recording
+
+    rep = DiagnosisReport(recording=stem)
+    rec = read_recording(csv_path)
     with _timed(rep.timings, "diagnose"):
-        ext = fmu_dir / f"{stem}_{tire}_extended.fmu"
         try:
-            diag, gain = run_diagnosis(rec, tire, fmu_path=ext, workers=1)
-            rep.diagnosis = dict(diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after),
-                                 agreement=gain.agreement, seconds=diag.seconds,
-                                 timings={k: round(v, 3) for k, v in diag.timings().items()})
-            for path in gain.fmu_paths:
-                rep.fmus.append({"file": f"fmu/{Path(path).name}", "kind": "extended_tire",
-                                 "role": "extended tire (" + (", ".join(diag.effects) or "no effect found") + ")"})
+            diag, gain = run_tractor_diagnosis(rec, fmu_dir=Path(out_dir) / "fmu", stem=f"{stem}_extended")
         except (InputError, ValueError) as exc:
             rep.errors.append(f"diagnose: {getattr(exc, 'problem', exc)}")
-            diag = None
-    if diag is not None:
-        with _timed(rep.timings, "figures"):
-            rep.figures["diagnosis"] = png_bytes(plot_diagnosis(diag, nrmse_before=gain.nrmse_before,
-                                                                nrmse_after=gain.nrmse_after))
+            return rep
+    rep.diagnosis = dict(diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after),
+                         agreement=gain.agreement, seconds=diag.seconds, fmu_seconds=gain.seconds,
+                         timings={k: round(v, 3) for k, v in diag.timings().items()})
+    role = "extended tire, fitted jointly with the whole tractor (" + (", ".join(diag.effects) or "no effect") + ")"
+    for path in gain.fmu_paths:
+        rep.fmus.append({"file": f"fmu/{Path(path).name}", "kind": "extended_tire", "role": role})
+    with _timed(rep.timings, "figures"):
+        rep.figures["diagnosis"] = png_bytes(plot_tractor_diagnosis(diag, nrmse_before=gain.nrmse_before,
+                                                                    nrmse_after=gain.nrmse_after))
     with _timed(rep.timings, "validate"):
         for entry in rep.fmus:
             entry["problems"] = _validate(Path(out_dir) / entry["file"])
@@ -188,10 +226,12 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
 
 
 def _job(args):
+    kind, *rest = args
     try:
-        return process_tire(*args)
+        return diagnose_recording(*rest) if kind == "recording" else process_tire(*rest)
     except Exception as exc:  # a bug must not take the batch down; it is shown in the report
-        rep = TireReport(recording=args[1], tire=args[2])
+        rep = DiagnosisReport(recording=rest[1]) if kind == "recording" else TireReport(recording=rest[1],
+                                                                                        tire=rest[2])
         rep.errors.append(f"internal error: {exc.__class__.__name__}: {exc}")
         return rep
 
@@ -229,16 +269,20 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
             continue
         reports.append(RecordingReport(source=str(path), stem=stem, ok=True, speed_kmh=rec.speed_kmh,
                                        sample_rate_hz=rec.sample_rate_hz))
-        jobs += [(str(path), stem, tire, str(out_dir)) for tire in rec.tires]
+        # the joint diagnoses take longest: they go first
+        jobs.insert(0, ("recording", str(path), stem, str(out_dir)))
+        jobs += [("tire", str(path), stem, tire, str(out_dir)) for tire in rec.tires]
     workers = max(1, min(workers or os.cpu_count() or 1, len(jobs) or 1))
     from tqdm import tqdm
-    bar = tqdm(total=len(jobs), desc="cleatfmu", unit="tire", delay=1.0, disable=None if progress else True)
+    bar = tqdm(total=len(jobs), desc="cleatfmu", unit="job", delay=1.0, disable=None if progress else True)
     results = []
     try:
         if workers > 1:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
-            with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork")) as pool:
+            from .diagnose.select import single_thread_blas
+            with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
+                                     initializer=single_thread_blas) as pool:
                 for rep in pool.map(_job, jobs):
                     results.append(rep)
                     bar.update(1)
@@ -250,7 +294,10 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
         bar.close()
     by_stem = {r.stem: r for r in reports}
     for rep in results:
-        by_stem[rep.recording].tires.append(rep)
+        if isinstance(rep, DiagnosisReport):
+            by_stem[rep.recording].diagnosis = rep
+        else:
+            by_stem[rep.recording].tires.append(rep)
     totals: dict = {}
     for rep in results:
         for stage, sec in rep.timings.items():

@@ -36,7 +36,7 @@ from .recording import FRONT_TIRES, REAR_TIRES, STANDARD_GRAVITY, Recording
 
 __all__ = [
     "DEFAULT_CUTOFF_HZ", "FILTER_ORDER", "TireSignal",
-    "lowpass", "filter_guard_s", "noise_rms", "check_clipping", "preprocess",
+    "lowpass", "lowpass_design", "filter_guard_s", "noise_rms", "check_clipping", "preprocess",
 ]
 
 DEFAULT_CUTOFF_HZ = 100.0
@@ -118,14 +118,9 @@ def lowpass(x, *, sample_rate_hz: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ,
     InputError
         If the cut-off is not below the Nyquist frequency.
     """
-    if not (cutoff_hz > 0):
-        raise InputError(source, f"low-pass cut-off must be > 0 Hz, got {cutoff_hz}")
-    if cutoff_hz >= sample_rate_hz / 2 * (1 - 1e-9):
-        raise InputError(source, f"low-pass cut-off {cutoff_hz:g} Hz is not below the Nyquist frequency "
-                                 f"{sample_rate_hz / 2:g} Hz (sampling rate {sample_rate_hz:g} Hz)")
+    sos, zi, edge = lowpass_design(sample_rate_hz=sample_rate_hz, cutoff_hz=cutoff_hz, order=order, source=source)
     from scipy import signal   # here, not at import: a second of start-up for commands that never filter
 
-    sos, zi, edge = _butter_sos(order, float(cutoff_hz), float(sample_rate_hz))
     x = np.asarray(x, dtype=float)
     if x.ndim != 1 or x.size <= edge:      # scipy's checks and messages for what the fast path does not take
         return signal.sosfiltfilt(sos, x)
@@ -135,6 +130,23 @@ def lowpass(x, *, sample_rate_hz: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ,
     y, _ = signal.sosfilt(sos, ext, zi=zi * ext[0])
     y, _ = signal.sosfilt(sos, y[::-1], zi=zi * y[-1])
     return y[::-1][edge:-edge].copy()
+
+
+def lowpass_design(*, sample_rate_hz: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ, order: int = FILTER_ORDER,
+                   source=None):
+    """The design :func:`lowpass` filters with, after its checks: (sos, sosfilt_zi, pad length in samples).
+
+    Raises
+    ------
+    InputError
+        If the cut-off is not below the Nyquist frequency.
+    """
+    if not (cutoff_hz > 0):
+        raise InputError(source, f"low-pass cut-off must be > 0 Hz, got {cutoff_hz}")
+    if cutoff_hz >= sample_rate_hz / 2 * (1 - 1e-9):
+        raise InputError(source, f"low-pass cut-off {cutoff_hz:g} Hz is not below the Nyquist frequency "
+                                 f"{sample_rate_hz / 2:g} Hz (sampling rate {sample_rate_hz:g} Hz)")
+    return _butter_sos(order, float(cutoff_hz), float(sample_rate_hz))
 
 
 @functools.lru_cache(maxsize=64)

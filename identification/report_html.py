@@ -2,9 +2,12 @@
 
 Sections (each an ``<section id=...>``): ``summary``, ``table4`` (the paper's
 Table 4 for every speed and tire), ``waveform`` (waveform fits with 95 %
-intervals), ``tire-<recording>-<tire>`` (Figure 9a/9b, the co-simulated FMU
-against the measurement, the diagnosis with evidence and gains, before/after
-overlays), ``fmus`` (every FMU written, with its validation) and ``timings``.
+intervals), ``recommended`` (one k, c per tire from the joint whole-tractor
+diagnosis, beside the paper's and the waveform values, with what is left
+unexplained), ``diagnosis-<recording>`` (effects with evidence, body, gains,
+overlays per channel), ``tire-<recording>-<tire>`` (Figure 9a/9b, the
+co-simulated point-contact FMU against the measurement), ``fmus`` (every FMU
+written, with its validation) and ``timings``.
 """
 
 from __future__ import annotations
@@ -53,12 +56,16 @@ def _summary(result: BatchResult) -> str:
             rows.append(f'<tr><td class="l">{_e(r.source)}</td><td class="l bad">failed</td>'
                         f'<td class="l">{_e(r.error)}</td></tr>')
             continue
-        errors = [f"{t.tire}: {e}" for t in r.tires for e in t.errors]
+        errors = [f"{t.tire}: {e}" for t in r.tires for e in t.errors] + \
+            (r.diagnosis.errors if r.diagnosis is not None else [])
         status = '<span class="ok">processed</span>' if not errors else '<span class="bad">partly failed</span>'
-        effects = "; ".join(f"{t.tire}: " + (", ".join(t.diagnosis["effects"]) or "none")
-                            for t in r.tires if t.diagnosis)
-        detail = _e("; ".join(errors)) if errors else f"{r.speed_kmh:.4g} km/h, {r.sample_rate_hz:.6g} Hz, " \
-                                                       f"effects found — {_e(effects)}"
+        d = r.diagnosis.diagnosis if r.diagnosis is not None else None
+        found = "not diagnosed" if d is None else (
+            "effects found — " + (", ".join(d["effects"]) or "none") + "; " +
+            ("residual above noise on " + ", ".join(t for t, v in d["tires"].items() if v["unexplained"])
+             if any(v["unexplained"] for v in d["tires"].values()) else "residual at the noise floor"))
+        detail = _e("; ".join(errors)) if errors else \
+            f"{r.speed_kmh:.4g} km/h, {r.sample_rate_hz:.6g} Hz, {_e(found)}"
         rows.append(f'<tr><td class="l">{_e(r.source)}</td><td class="l">{status}</td>'
                     f'<td class="l">{detail}</td></tr>')
     n_bad = len(result.failures)
@@ -110,6 +117,63 @@ def _waveform(result: BatchResult) -> str:
             f'{"".join(rows)}</table></section>')
 
 
+def _recommended(result: BatchResult) -> str:
+    rows = []
+    for r, t in _tires(result):
+        rec = r.recommended(t.tire)
+        if rec is None:
+            continue
+        d = r.diagnosis.diagnosis["tires"][t.tire]
+        left = d["unexplained"]
+        status = '<span class="ok">at the noise floor</span>' if left is None else \
+            (f'<span class="bad">unexplained {left["share"]:.1%} of the signal, '
+             f'{left["window"][0]:.2f}–{left["window"][1]:.2f} s</span>')
+        paper = t.paper["k"] / 1e3 if t.paper else None
+        wave = t.waveform["k"] / 1e3 if t.waveform else None
+        rows.append(f'<tr><td class="l">{_e(r.stem)}</td><td class="l">{t.tire}</td>'
+                    f'<td><b>{rec["k"] / 1e3:.2f}</b></td><td>{rec["k_ci"][0] / 1e3:.2f} – {rec["k_ci"][1] / 1e3:.2f}</td>'
+                    f'<td><b>{rec["c"] / 1e3:.3f}</b></td><td>{rec["c_ci"][0] / 1e3:.3f} – {rec["c_ci"][1] / 1e3:.3f}</td>'
+                    f'<td>{_f(paper, ".2f")}</td><td>{_f(wave, ".2f")}</td>'
+                    f'<td>{d["nrmse_before"]:.1%} → {d["nrmse_after"]:.1%}</td><td>{d["noise_nrmse"]:.1%}</td>'
+                    f'<td class="l">{status}</td></tr>')
+    return ('<section id="recommended"><h2>Recommended stiffness and damping (joint whole-tractor diagnosis)</h2>'
+            '<p class="note">One fit per recording: every channel at once under one body (heave, pitch, roll), with '
+            'the effects the diagnosis named; 95 % intervals from the joint fit. They hold if the model is right: '
+            'a tire whose residual stays above its noise floor is marked, and its intervals are conditional on the '
+            'model. NRMSE of the point-contact tires and of the extended tires, both as FMUs co-simulated under the '
+            'body with fmpy; "noise" is the NRMSE the measurement noise alone would give.</p>'
+            '<table><tr><th class="l">recording</th><th class="l">tire</th><th>K / kN·m⁻¹</th><th>K interval</th>'
+            '<th>C / kN·s·m⁻¹</th><th>C interval</th><th>K paper</th><th>K waveform</th><th>NRMSE</th>'
+            f'<th>noise</th><th class="l">residual</th></tr>{"".join(rows)}</table></section>')
+
+
+def _diagnosis_section(r) -> str:
+    rep = r.diagnosis
+    out = [f'<section id="diagnosis-{_e(r.stem)}"><h3>{_e(r.stem)}: whole-tractor diagnosis</h3>']
+    for err in rep.errors:
+        out.append(f'<p class="bad">{_e(err)}</p>')
+    d = rep.diagnosis
+    if d is not None:
+        body = d["body"]
+        effects = ", ".join(d["effects"]) or "none — the four-corner model explains the data to within noise"
+        speed = body["speed_m_s"]
+        delay = "" if speed["from_delay"] is None else \
+            f', {speed["from_delay"] * 3.6:.2f} km/h from the front/rear delay'
+        indices = "; ".join(f'{name.replace("_", " ")} {body[name]["value"]:.3f} '
+                            f'({body[name]["ci"][0]:.3f}–{body[name]["ci"][1]:.3f})'
+                            for name in ("pitch_index", "roll_index", "pivot_index") if body.get(name))
+        out.append(f'<p>Effects the four-corner model misses: <b>{_e(effects)}</b>. Front axle {body["front_axle"]}'
+                   f'{"; " + indices if indices else ""}. Speed {speed["sidecar"] * 3.6:.2f} km/h (sidecar){delay}. '
+                   f'Extended FMUs co-simulated under the body agree with the fitting model to '
+                   f'{d["agreement"]:.1e}; diagnosis {d["seconds"]:.1f} s. Intervals: {_e(d["intervals"])}.</p>')
+        for name in d["effects"]:
+            out.append(f'<div class="effect"><b>{_e(name)}</b>: {_e(d["evidence"].get(name, ""))}</div>')
+        if "diagnosis" in rep.figures:
+            out.append(_img(rep.figures["diagnosis"], f"{r.stem} whole-tractor diagnosis"))
+    out.append("</section>")
+    return "".join(out)
+
+
 def _tire_section(r, t) -> str:
     out = [f'<section id="tire-{_e(r.stem)}-{t.tire}"><h3>{_e(r.stem)} · {t.tire}</h3>']
     for err in t.errors:
@@ -123,37 +187,28 @@ def _tire_section(r, t) -> str:
                    f'the misfit sits mostly in the <b>{_e(s["worst_window"].replace("_", " "))}</b> window.</p>')
         out.append(_img(t.figures.get("comparison", b""), f"{r.stem} {t.tire} co-simulation")
                    if "comparison" in t.figures else "")
-    d = t.diagnosis
-    if d is not None:
-        effects = ", ".join(d["effects"]) or "none — the point-contact model explains the data to within noise"
-        out.append(f'<p>Diagnosis: <b>{_e(effects)}</b>. NRMSE with FMUs co-simulated in fmpy: point contact '
-                   f'<b>{d["nrmse_before"]:.1%}</b> → extended <b>{d["nrmse_after"]:.1%}</b> '
-                   f'(fitting model and FMU agree to {d["agreement"]:.1e}). '
-                   f'k {d["k"] / 1e3:.1f} kN/m ({d["k_ci"][0] / 1e3:.1f}–{d["k_ci"][1] / 1e3:.1f}), '
-                   f'c {d["c"] / 1e3:.2f} kN·s/m ({d["c_ci"][0] / 1e3:.2f}–{d["c_ci"][1] / 1e3:.2f}).</p>')
-        for name in d["effects"]:
-            out.append(f'<div class="effect"><b>{_e(name)}</b>: {_e(d["evidence"].get(name, ""))}</div>')
-        rows = "".join(f'<tr><td class="l">{_e(n)}</td><td>{v["value"]:.5g}</td><td class="l">{_e(v["unit"])}</td>'
-                       f'<td>{v["ci"][0]:.5g} – {v["ci"][1]:.5g}</td></tr>' for n, v in d["parameters"].items())
-        out.append('<table><tr><th class="l">parameter</th><th>value</th><th class="l">unit</th><th>95 % interval</th>'
-                   f'</tr>{rows}</table>')
-        if "diagnosis" in t.figures:
-            out.append(_img(t.figures["diagnosis"], f"{r.stem} {t.tire} diagnosis"))
     out.append("</section>")
     return "".join(out)
 
 
+def _all_fmus(result: BatchResult):
+    for r in result.recordings:
+        yield from (r.diagnosis.fmus if r.diagnosis is not None else [])
+        for t in r.tires:
+            yield from t.fmus
+
+
 def _fmus(result: BatchResult) -> str:
     rows = []
-    for r, t in _tires(result):
-        for f in t.fmus:
-            ok = not f.get("problems")
-            verdict = '<span class="ok">validate_fmu: no problem</span>' if ok else \
-                '<span class="bad">' + _e("; ".join(f["problems"])) + "</span>"
-            rows.append(f'<tr><td class="l"><code>{_e(f["file"])}</code></td><td class="l">{_e(f["kind"])}</td>'
-                        f'<td class="l">{_e(f["role"])}</td><td class="l">{verdict}</td></tr>')
-    return ('<section id="fmus"><h2>Exported FMUs</h2><p class="note">FMI 2.0 co-simulation, built with pythonfmu: '
-            'the importing machine needs Python 3.</p><table><tr><th class="l">file</th><th class="l">kind</th>'
+    for f in _all_fmus(result):
+        ok = not f.get("problems")
+        verdict = '<span class="ok">validate_fmu: no problem</span>' if ok else \
+            '<span class="bad">' + _e("; ".join(f["problems"])) + "</span>"
+        rows.append(f'<tr><td class="l"><code>{_e(f["file"])}</code></td><td class="l">{_e(f["kind"])}</td>'
+                    f'<td class="l">{_e(f["role"])}</td><td class="l">{verdict}</td></tr>')
+    return ('<section id="fmus"><h2>Exported FMUs</h2><p class="note">FMI 2.0 co-simulation, native C: binaries '
+            'for linux64, win64 and darwin64 and the C sources inside; the importing machine needs no Python.</p>'
+            '<table><tr><th class="l">file</th><th class="l">kind</th>'
             f'<th class="l">content</th><th class="l">validation</th></tr>{"".join(rows)}</table></section>')
 
 
@@ -171,11 +226,13 @@ def render_report(result: BatchResult, *, title: str = "cleatfmu report", extra:
     """The report as an HTML string."""
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     tires = "".join(_tire_section(r, t) for r, t in _tires(result))
+    diagnoses = "".join(_diagnosis_section(r) for r in result.recordings if r.diagnosis is not None)
     return (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
             f'<style>{_CSS}</style></head><body><h1>{_e(title)}</h1><p class="note">cleatfmu {__version__}, {stamp}. '
             'Hub accelerations in m/s², gravity excluded; all comparisons after the zero-phase 100 Hz low-pass.</p>'
-            f'{_summary(result)}{_table4(result)}{_waveform(result)}'
-            f'<section id="tires"><h2>Tires: decay, co-simulation, diagnosis</h2>{tires}</section>'
+            f'{_summary(result)}{_table4(result)}{_waveform(result)}{_recommended(result)}'
+            f'<section id="diagnoses"><h2>Whole-tractor diagnoses</h2>{diagnoses}</section>'
+            f'<section id="tires"><h2>Tires: decay, point-contact co-simulation</h2>{tires}</section>'
             f'{_fmus(result)}{_timings(result, extra)}</body></html>\n')
 
 
@@ -183,8 +240,12 @@ def write_report(result: BatchResult, *, title: str = "cleatfmu report", extra: 
     """Write ``report.html`` and ``summary.json`` into the batch's output folder; return the report's path."""
     out = Path(result.out_dir)
     summary = {"recordings": [{"source": r.source, "ok": r.ok, "error": r.error,
-                               "tires": {t.tire: {"paper": t.paper, "waveform": t.waveform, "simulate": t.simulate,
-                                                  "diagnosis": t.diagnosis, "fmus": t.fmus, "errors": t.errors}
+                               "diagnosis": r.diagnosis.diagnosis if r.diagnosis is not None else None,
+                               "diagnosis_fmus": r.diagnosis.fmus if r.diagnosis is not None else [],
+                               "diagnosis_errors": r.diagnosis.errors if r.diagnosis is not None else [],
+                               "tires": {t.tire: {"recommended": r.recommended(t.tire), "paper": t.paper,
+                                                  "waveform": t.waveform, "simulate": t.simulate, "fmus": t.fmus,
+                                                  "errors": t.errors}
                                          for t in r.tires}} for r in result.recordings],
                "failures": result.failures, "seconds": result.seconds, "stage_seconds": result.timings}
     atomic_write_texts({out / "report.html": render_report(result, title=title, extra=extra),

@@ -155,3 +155,17 @@ def test_cli_bad_input(cli, tmp_path, args, needle):
     res = cli("diagnose", csv_path, *args)
     assert res.code == 2 and res.out == "" and needle in res.err
     assert len(res.err.strip().splitlines()) == 1
+
+
+def test_cli_single_channel_recording_falls_back_to_the_corner_model(cli, tmp_path):
+    """A recording of one hub: the diagnosis runs on that channel alone (no pair, no body), per-tire JSON."""
+    p, _ = draw(("enveloping",), _seed(("enveloping",), 1))
+    run = run_rig(("enveloping",), dict(p, **{"sensor.channels": "RL"}), seed=5)
+    csv_path, _ = write_run(run, tmp_path / "rec")
+    res = cli("diagnose", csv_path, "--json", "--workers", "1")
+    assert res.code == 0, res.err
+    doc = json.loads(res.out)
+    assert doc["tire"] == "RL" and doc["effects"] == ["enveloping"]
+    assert doc["k"] == pytest.approx(run.truth["tires"]["RL"]["k"], rel=0.03)
+    assert doc["c"] == pytest.approx(run.truth["tires"]["RL"]["c"], rel=0.10)
+    assert doc["nrmse_after"] < doc["nrmse_before"] / 2

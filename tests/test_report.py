@@ -14,7 +14,7 @@ import pytest
 
 from identification.rig import run_rig, write_run
 
-SECTIONS = ("summary", "table4", "waveform", "tires", "fmus", "timings")
+SECTIONS = ("summary", "table4", "waveform", "recommended", "diagnoses", "tires", "fmus", "timings")
 
 
 @pytest.fixture(scope="module")
@@ -37,6 +37,7 @@ def test_demo_report_sections_tables_images(demo, cli):
     for section in SECTIONS:
         assert f'<section id="{section}">' in html, section
     for rec in ("testday_7kmh", "testday_10kmh"):
+        assert f'id="diagnosis-{rec}"' in html
         for tire in ("FL", "FR", "RL", "RR"):
             assert f'id="tire-{rec}-{tire}"' in html
     # the Table-4 rows hold what `cleatfmu identify --json` says for the same recordings
@@ -54,7 +55,7 @@ def test_demo_report_sections_tables_images(demo, cli):
             assert float(row[3]) == pytest.approx(entry["T"], abs=6e-4)
     # every embedded image is a PNG that decodes to a real picture
     images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', html)
-    assert len(images) >= 8 * 3
+    assert len(images) == 8 * 2 + 2     # per tire: decay, co-simulation; per recording: the joint diagnosis
     for data in images:
         pixels = _png(base64.b64decode(data))
         assert pixels.ndim == 3 and pixels.shape[0] > 200 and pixels.shape[1] > 400
@@ -66,17 +67,43 @@ def test_demo_fmus_are_valid_and_listed(demo):
     from fmpy.validation import validate_fmu
     code, out = demo
     fmus = sorted((out / "fmu").glob("*.fmu"))
-    assert len(fmus) >= 16   # 8 point-contact + 8 extended (+ the other axle's with axle_coupling)
+    # one point-contact and one extended FMU per tire: the joint diagnosis builds no partner duplicates
+    assert len(fmus) == 16
     summary = json.loads((out / "summary.json").read_text())
-    listed = {f["file"] for r in summary["recordings"] for t in r["tires"].values() for f in t["fmus"]}
-    assert {f"fmu/{p.name}" for p in fmus} == listed
+    listed = [f["file"] for r in summary["recordings"]
+              for f in r["diagnosis_fmus"] + [g for t in r["tires"].values() for g in t["fmus"]]]
+    assert sorted(listed) == sorted(f"fmu/{p.name}" for p in fmus)
     for path in fmus:
         assert validate_fmu(str(path)) == [], path.name
+        assert "binaries/win64/" in "".join(__import__("zipfile").ZipFile(path).namelist()), path.name
+
+
+def test_demo_recommends_one_joint_k_c_per_tire_within_the_truth(demo):
+    """One joint diagnosis per recording; its k, c per tire judged against the test day's truth files."""
+    from identification.examples import truth_path
+    code, out = demo
+    summary = json.loads((out / "summary.json").read_text())
+    html = (out / "report.html").read_text()
+    table = html[html.index('<section id="recommended">'):html.index('<section id="diagnoses">')]
     for r in summary["recordings"]:
+        name = os.path.basename(r["source"]).removeprefix("testday_").removesuffix(".csv")
+        truth = json.loads(truth_path(name).read_text())
+        d = r["diagnosis"]
+        assert r["diagnosis_errors"] == []
+        assert "enveloping" in d["effects"] and {"axle_coupling", "roll_coupling"} <= set(d["effects"])
         for tire, t in r["tires"].items():
             assert t["errors"] == []
-            assert "enveloping" in t["diagnosis"]["effects"], (r["source"], tire)
-            assert t["diagnosis"]["nrmse_after"] < t["diagnosis"]["nrmse_before"] / 2
+            rec = t["recommended"]
+            assert rec["k"] == d["tires"][tire]["k"] and rec["source"] == "joint diagnosis"
+            assert rec["k"] == pytest.approx(truth["tires"][tire]["k"], rel=0.03), (name, tire)
+            assert rec["c"] == pytest.approx(truth["tires"][tire]["c"], rel=0.10), (name, tire)
+            assert rec["k_ci"][0] < rec["k"] < rec["k_ci"][1]
+            after, noise = d["tires"][tire]["nrmse_after"], d["tires"][tire]["noise_nrmse"]
+            assert after < d["tires"][tire]["nrmse_before"] / 2
+            # the report's verdict follows the numbers: at the noise floor only if within 1.5x the noise
+            assert (d["tires"][tire]["unexplained"] is None) == (after <= 1.5 * noise) or \
+                abs(after / noise - 1.5) < 0.01, (name, tire, after, noise)
+            assert f"<b>{rec['k'] / 1e3:.2f}</b>" in table
 
 
 def _chromium():
@@ -128,8 +155,9 @@ def test_report_with_a_broken_recording(cli, tmp_path):
     assert by_name["broken.csv"]["ok"] is False and "abc" in by_name["broken.csv"]["error"]
     for good in ("good_a.csv", "good_b.csv"):
         assert by_name[good]["ok"] is True
-        assert by_name[good]["tires"]["FL"]["diagnosis"] is not None
-    assert by_name["good_b.csv"]["tires"]["FL"]["diagnosis"]["effects"] == ["enveloping"]
+        assert by_name[good]["diagnosis"] is not None
+        assert by_name[good]["tires"]["FL"]["recommended"]["source"] == "joint diagnosis"
+    assert by_name["good_b.csv"]["diagnosis"]["effects"] == ["enveloping"]
     html = (tmp_path / "out" / "report.html").read_text()
     assert "broken.csv" in html and "failed" in html
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from identification import tire_law
-from identification.model import Body, Cleat, TractorModel
+from identification.model import Body, Cleat, TractorModel, cleat_inputs
 from identification.model.kernels import run_model
 from identification.model.stepping import run_model_python
 from identification.preprocess import lowpass
@@ -146,3 +146,29 @@ def test_pivot_front_axle_carries_no_roll_moment():
     assert np.allclose(gen[:3], 0.0) and gen[3] == pytest.approx(200.0)
     Jr, _, _ = Body(TIRES, LOADS, L, pitch=True, roll=True).matrices()
     assert abs((Jr.T @ f)[2]) > 100.0           # a rigid front axle rolls the body
+
+
+@pytest.mark.parametrize("options", [(), ("footprint",)])
+def test_inputs_of_all_tires_are_cleat_inputs_per_tire(options):
+    model = _record(dict(pitch=True, roll=True), options=options)
+    start, h, n = model.grid(0.2, 3.0, 1e-3, 1e-3)
+    inputs = model.inputs(start, h, n)
+    edges = []
+    for j, (p, arrival) in enumerate(zip(model.laws, model.arrivals_s)):
+        *rows, e = cleat_inputs(start, h, n, arrival_s=arrival, cleat=model.cleat,
+                                external=not model.builtin_cleat(j), x_offset_m=p["cleat_x"])
+        for name, row in zip(("road_z", "road_vz", "hub_x", "hub_vx"), rows):
+            np.testing.assert_array_equal(getattr(inputs, name)[j], row)
+        edges += [(i, j, t_e) for i, t_e in e]
+    assert inputs.edges == tuple(sorted(edges)) and (len(edges) == 8) == (not options)
+
+
+def test_matrices_are_fresh_copies():
+    body = Body(TIRES, LOADS, L, pitch=True, roll=True, pitch_index=0.8)
+    J, mass, _ = body.matrices()
+    J[:] = 0.0
+    mass[:] = 0.0
+    J2, mass2, _ = Body(TIRES, LOADS, L, pitch=True, roll=True, pitch_index=0.8).matrices()
+    assert np.all(mass2 > 0) and np.any(J2 != 0)
+    listed = Body(list(TIRES), list(LOADS), L, pitch=True, roll=True, pitch_index=0.8)   # unhashable: not cached
+    np.testing.assert_array_equal(listed.matrices()[0], J2)

@@ -62,9 +62,12 @@ def _text(diag, gain) -> str:
     return "\n".join(lines)
 
 
-def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=None, workers: int = 1,
-                          progress=None):
-    """Diagnose every channel jointly and measure the gain with one FMU per tire: (TractorDiagnosis, TractorGain)."""
+def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=None, stem: str | None = None,
+                          workers: int = 1, progress=None):
+    """Diagnose every channel jointly and measure the gain with one FMU per tire: (TractorDiagnosis, TractorGain).
+
+    With `fmu_dir` the extended FMUs are kept there as ``<stem>_<TIRE>.fmu`` (`stem`: the recording's).
+    """
     from ..tractor_cosim import measure_tractor_gain
     from .joint_select import diagnose_tractor
 
@@ -72,7 +75,7 @@ def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=
     if progress is not None:
         progress("FMU co-simulation")
     try:
-        gain = measure_tractor_gain(diag, fmu_dir)
+        gain = measure_tractor_gain(diag, fmu_dir, stem=stem)
     except OSError as exc:
         raise InputError(fmu_dir, f"cannot write: {exc.strerror or exc}") from None
     return diag, gain

@@ -4,7 +4,9 @@
 ``lift_off``            the fitted model loses contact ≥ 15 ms on some tire, and the measured hub there
                         is near free fall (mean within 0.35 g of −1 g; the body's rotation adds to it);
 ``axle_coupling``       the other axle's impact shows in a channel (the extended model's residual there
-                        ≥ 5× the noise), and the pitch index differs from 1 by ≥ 0.05, its interval excluding 1;
+                        ≥ 5× the noise), and the pitch index differs from 1 by ≥ 0.05, its interval excluding 1
+                        (with ``roll_coupling``, the rigid body: the body explains ≥ 50 % of that cross-talk,
+                        which at a pitch index of 1 travels through the shared roll alone);
 ``roll_coupling``       the other side's impact shows in a channel (≥ 5× the noise) and the roll index is
                         identified (interval within a factor 3);
 ``front_axle_pivot``    the front-axle roll index is identified (interval within a factor 10) and the front
@@ -115,10 +117,17 @@ def _lift_off(fit, base):
 def _axle(fit, base):
     best = _best_cross(fit, base, (("FL", "RL"), ("FR", "RR"), ("RL", "FL"), ("RR", "FR")))
     lo, hi = fit.ci["pitch_index"]
-    coupled = abs(fit.params["pitch_index"] - 1.0) >= 0.05 and not (lo <= 1.0 <= hi)
     if best is None:
         return False, "no channel on the other axle of the same side"
     obs, src, ratio, peak, explained, at = best
+    if "roll_coupling" in fit.model.effects:
+        # the rigid tractor: an impact reaches the other axle through pitch and through the shared roll (at a
+        # pitch index of 1 through roll alone), so the evidence is the cross-talk the body explains
+        return ratio >= 5.0 and explained >= 0.5, (
+            f"{src}'s impact at t = {at:.3f} s shows in {obs}: {peak:.2f} m/s^2 peak ({ratio:.0f}x the noise "
+            f"RMS), {max(explained, 0):.0%} of it explained through the rigid body's pitch and roll, pitch "
+            f"dynamic index {_ci(fit, 'pitch_index', '.2f')}")
+    coupled = abs(fit.params["pitch_index"] - 1.0) >= 0.05 and not (lo <= 1.0 <= hi)
     return ratio >= 5.0 and coupled, (
         f"{src}'s impact at t = {at:.3f} s shows in {obs}: {peak:.2f} m/s^2 peak ({ratio:.0f}x the noise RMS), "
         f"{max(explained, 0):.0%} of it explained through pitch, dynamic index {_ci(fit, 'pitch_index', '.2f')}")

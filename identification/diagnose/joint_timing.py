@@ -39,8 +39,10 @@ PITCH_GRID = (0.7, 1.1)
 ROLL_GRID = (0.35, 0.7)
 #: Largest left/right stagger considered, s.
 MAX_STAGGER_S = 0.3
-#: Front/rear delay considered, as a fraction of the sidecar's (its speed may be that far off).
-DELAY_RANGE = (0.8, 1.2)
+#: Front/rear delay considered, as a fraction of the sidecar's: a GPS speed is a few percent off, and a wider
+#: range lets a misfitting response (a hub that lifts off, unmodelled here) pull the rear arrival onto the
+#: body's own pitch motion (seen: 0.8x on a lift-off recording at 11 km/h, the range's edge).
+DELAY_RANGE = (0.9, 1.1)
 #: Length of each wheel's response kept, s.
 RESPONSE_S = 0.8
 #: Step of the coarse search, s.
@@ -117,15 +119,19 @@ def _search(pb: TractorProblem, H: np.ndarray, before: int) -> tuple[float, int,
         return out
 
     nominal = rec.rear_axle_delay_s()
-    first = int(round((pb.first_impact_s - rec.time_s[0]) * fs))
+    # the first arrival searched is the left (or only side's) front wheel's, or with no front channel the
+    # rear one's: around the earliest onset, a rear onset moved back by the delay only if `d` adds it
+    first = int(round((min(pb.onsets[c] - (nominal if rear[w] else 0.0) for w, c in enumerate(pb.channels))
+                       - rec.time_s[0]) * fs))
 
     def at(w, idx):   # lin[w, idx], -inf outside the record
         idx = np.asarray(idx)
         inside = (idx >= 0) & (idx < n)
         return np.where(inside, lin[w, np.clip(idx, 0, n - 1)], -np.inf)
 
-    def cross_at(s, d):
-        return sum(2 * q(w, v, (right[v] - right[w]) * s + (rear[v] - rear[w]) * d) for (w, v) in cross)
+    def cross_at(s, d):   # zero with a single channel (no pair)
+        return sum((2 * q(w, v, (right[v] - right[w]) * s + (rear[v] - rear[w]) * d) for (w, v) in cross),
+                   np.zeros(np.broadcast(s, d).shape))
 
     def score(i, s, d):   # arrays broadcast: i first arrival, s stagger, d delay (samples)
         total = energy + cross_at(s, d)

@@ -191,13 +191,21 @@ def _judge(cand: Candidate, current_sse: float, current_p: int, n: int, n_eff: f
     return Candidate(cand.effect, fit, float(dbic), float(gain), cand.passed_gate, qualified, cand.evidence)
 
 
+def single_thread_blas() -> None:
+    """Hold BLAS to one thread in this (worker) process: with one worker per core, BLAS threads on top
+    oversubscribe the cores, and a small matrix product then waits for a busy core (seen: 5 ms -> 0.5 s)."""
+    from threadpoolctl import threadpool_limits
+    threadpool_limits(limits=1, user_api="blas")
+
+
 def _pool(workers: int):
     if workers <= 1:
         return None
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
     try:
-        return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"))
+        return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
+                                   initializer=single_thread_blas)
     except (ValueError, OSError):
         return None
 

@@ -28,11 +28,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..acquisition import sensed_acceleration
 from ..errors import InputError
 from ..model import Body, Cleat, TractorModel
 from ..model.kernels import run_model
-from ..preprocess import DEFAULT_CUTOFF_HZ, lowpass, noise_rms, preprocess
+from ..model.sensing import sensed_lowpassed, sensed_lowpassed_reference
+from ..preprocess import DEFAULT_CUTOFF_HZ, noise_rms, preprocess
 from ..recording import FRONT_TIRES, TIRES, Recording
 from .models import _UNLOADED_RADIUS_M as UNLOADED_RADIUS_M, tire_law_parameters
 
@@ -263,9 +263,18 @@ class TractorFitModel:
         """Low-passed predicted acceleration per channel on the recording's time base, m/s²."""
         pb, rec = self.problem, self.problem.rec
         traj = trajectory if trajectory is not None else self.simulate(theta, step_s=step_s)
-        fs = rec.sample_rate_hz
-        return {t: lowpass(sensed_acceleration(traj, i, rec.time_s, fs, rec.acquisition), sample_rate_hz=fs,
-                           cutoff_hz=pb.cutoff_hz) for i, t in enumerate(pb.channels)}
+        y = sensed_lowpassed(traj, rec.time_s, rec.sample_rate_hz, rec.acquisition, cutoff_hz=pb.cutoff_hz,
+                             tires=len(pb.channels))
+        return dict(zip(pb.channels, y))
+
+    def predict_reference(self, theta: dict, *, step_s: float | None = None, trajectory=None) -> dict:
+        """:meth:`predict` channel by channel with the public functions ``sensed_acceleration`` and ``lowpass``
+        (the reference of its compiled all-channel pass, :mod:`identification.model.sensing`)."""
+        pb, rec = self.problem, self.problem.rec
+        traj = trajectory if trajectory is not None else self.simulate(theta, step_s=step_s)
+        y = sensed_lowpassed_reference(traj, rec.time_s, rec.sample_rate_hz, rec.acquisition,
+                                       cutoff_hz=pb.cutoff_hz, tires=len(pb.channels))
+        return dict(zip(pb.channels, y))
 
     def bounds(self, start: dict) -> tuple[dict, dict]:
         """Physical bounds (lower, upper) around the starting values."""

@@ -6,7 +6,10 @@
 * :mod:`~identification.model.stepping` - the co-simulation master's stepping
   scheme for any body, in plain Python (the reference, also driving FMUs);
 * :mod:`~identification.model.kernels` - the same stepping compiled with numba
-  for the fitting models.
+  for the fitting models;
+* :mod:`~identification.model.sensing` - what the model's accelerometers show
+  after the acquisition chain and the analysis low-pass, all channels in one
+  compiled pass.
 """
 
 from .tractor import Body, Cleat, TractorModel, cleat_inputs

@@ -122,23 +122,25 @@ def _step(J, minv, zs, W, rz, rv, hx, hv, Q, q0, dq0, h, points):
     return Z, V, F, A, jumps
 
 
-def _drop_stale_cache() -> None:
-    """Drop the kernel's on-disk compilation when the tire law changed since it was cached.
+def drop_stale_cache(stem: str, tag: str, dependency) -> None:
+    """Drop the on-disk compilations of this package's module `stem` when module `dependency` changed.
 
-    numba keys a cached function on its own file only, so the kernel compiled
-    with an older :func:`identification.tire_law.tire_force` would be reused;
-    a marker named after a hash of the law's source tells the two apart.
+    numba keys a cached function on its own file only, so a kernel compiled
+    with an older version of what it calls from another module (the tire law
+    :func:`identification.tire_law.tire_force`, the chain's
+    :func:`identification.acquisition.hold`) would be reused; a marker named
+    ``<stem>.<tag>-<hash of the dependency's source>`` tells the versions apart.
     """
     import hashlib
     import inspect
     from pathlib import Path
 
     try:
-        stamp = hashlib.sha256(inspect.getsource(tire_law).encode()).hexdigest()[:16]
+        stamp = hashlib.sha256(inspect.getsource(dependency).encode()).hexdigest()[:16]
         cache = Path(__file__).with_name("__pycache__")
-        marker = cache / f"kernels.law-{stamp}"
+        marker = cache / f"{stem}.{tag}-{stamp}"
         if cache.is_dir() and not marker.exists():
-            for old in list(cache.glob("kernels._step-*.nb[ic]")) + list(cache.glob("kernels.law-*")):
+            for old in list(cache.glob(f"{stem}.*.nb[ic]")) + list(cache.glob(f"{stem}.{tag}-*")):
                 old.unlink(missing_ok=True)
             marker.touch()
     except OSError:   # pragma: no cover - a read-only install keeps numba's own cache logic
@@ -146,7 +148,7 @@ def _drop_stale_cache() -> None:
 
 
 if numba is not None:
-    _drop_stale_cache()
+    drop_stale_cache("kernels", "law", tire_law)
     _step = numba.njit(cache=True, fastmath=False)(_step)
 
 

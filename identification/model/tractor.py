@@ -49,6 +49,7 @@ time is a continuous parameter of the model.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -138,6 +139,13 @@ class Body:
 
     def matrices(self):
         """(J, mass, coordinates): hub displacement per coordinate (tires × q), diagonal masses, names."""
+        try:                                   # (a fit builds the same body for many model runs)
+            J, mass, names = _matrices(self)
+        except TypeError:                      # unhashable fields (lists): not cached
+            J, mass, names = self._matrices()
+        return J.copy(), mass.copy(), names
+
+    def _matrices(self):
         g = STANDARD_GRAVITY
         n_t = len(self.tires)
         row = {t: i for i, t in enumerate(self.tires)}
@@ -188,6 +196,9 @@ class Body:
         return J, np.array(masses), tuple(names)
 
 
+_matrices = functools.lru_cache(maxsize=64)(Body._matrices)
+
+
 @dataclass(frozen=True)
 class Cleat:
     """The cleat: height and width (m) in the driving direction, crossed at `speed_m_s`."""
@@ -229,9 +240,17 @@ def cleat_inputs(start_s: float, step_s: float, n: int, *, arrival_s: float, cle
     t = start_s + step_s * np.arange(n)
     road = np.zeros(n)
     rate = np.zeros(n)
+    edges = _cleat_road(road, rate, t, start_s, step_s, arrival_s=arrival_s, cleat=cleat) if external else []
+    x = cleat.speed_m_s * (t - arrival_s) + x_offset_m
+    return road, rate, x, np.full(n, float(cleat.speed_m_s)), edges
+
+
+def _cleat_road(road, rate, t, start_s: float, step_s: float, *, arrival_s: float, cleat: Cleat) -> list:
+    """Write the rectangular cleat into one tire's zeroed road height and rate rows; its edges [(index, time)]."""
+    n = road.size
     edges = []
-    H, v = cleat.height_m, cleat.speed_m_s
-    if external and H:
+    H = cleat.height_m
+    if H:
         t_up, t_down = arrival_s, arrival_s + cleat.duration_s
         i_up = int(math.floor((t_up - start_s) / step_s + 0.5))
         i_down = int(math.floor((t_down - start_s) / step_s + 0.5))
@@ -245,8 +264,7 @@ def cleat_inputs(start_s: float, step_s: float, n: int, *, arrival_s: float, cle
                 edges.append((i_e, t_e))
         if i_up == i_down and 0 <= i_up < n:                     # a cleat shorter than one step
             road[i_up] = 0.0
-    x = v * (t - arrival_s) + x_offset_m
-    return road, rate, x, np.full(n, float(v)), edges
+    return edges
 
 
 @dataclass(frozen=True, eq=False)
@@ -295,15 +313,18 @@ class TractorModel:
 
     def inputs(self, start_s: float, step_s: float, n: int) -> Inputs:
         """Every tire's inputs on the grid (built-in cleats: flat road, x from the arrival)."""
-        rows = [[], [], [], []]
+        nt, v = len(self.laws), self.cleat.speed_m_s       # (cleat_inputs per tire, into shared rows)
+        t = start_s + step_s * np.arange(n)
+        road, rate = np.zeros((nt, n)), np.zeros((nt, n))
         edges = []
-        for j, (p, arr) in enumerate(zip(self.laws, self.arrivals_s)):
-            *cols, e = cleat_inputs(start_s, step_s, n, arrival_s=arr, cleat=self.cleat,
-                                    external=not self.builtin_cleat(j), x_offset_m=p["cleat_x"])
-            for r, c in zip(rows, cols):
-                r.append(c)
-            edges += [(i, j, t_e) for i, t_e in e]
-        return Inputs(*(np.array(r) for r in rows), edges=tuple(sorted(edges)))
+        for j, arr in enumerate(self.arrivals_s):
+            if not self.builtin_cleat(j):
+                e = _cleat_road(road[j], rate[j], t, start_s, step_s, arrival_s=arr, cleat=self.cleat)
+                edges += [(i, j, t_e) for i, t_e in e]
+        arrivals = np.array(self.arrivals_s, dtype=float)[:, None]
+        offsets = np.array([p["cleat_x"] for p in self.laws], dtype=float)[:, None]
+        x = v * (t - arrivals) + offsets
+        return Inputs(road, rate, x, np.full((nt, n), float(v)), edges=tuple(sorted(edges)))
 
     def static_hub_z(self, hub_x0) -> np.ndarray:
         """Hub heights where every tire carries its static load at rest (closed form of the law), m."""
