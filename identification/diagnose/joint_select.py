@@ -245,9 +245,14 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
         while len(selected) < MAX_EFFECTS:
             tries = [(e,) for e in effects if e not in selected and pb.available(e, selected)]
             if ("axle_coupling",) in tries and ("roll_coupling",) in tries and len(pb.channels) == 4:
-                tries.append(("axle_coupling", "roll_coupling"))   # the rigid tractor in one step
+                # the rigid tractor in one step; and with the footprint, which on a tractor that rolls and
+                # pitches is often needed at the same time before either alone fits at all
+                bodies = [("axle_coupling", "roll_coupling")]
                 if "front_axle_pivot" in effects:
-                    tries.append(("axle_coupling", "roll_coupling", "front_axle_pivot"))
+                    bodies.append(("axle_coupling", "roll_coupling", "front_axle_pivot"))
+                tries += bodies
+                if ("enveloping",) in tries:
+                    tries += [("enveloping",) + body for body in bodies]
             if not tries:
                 break
             jobs = [(selected + list(new), current, new, start0) for new in tries]
