@@ -97,6 +97,7 @@ def main(argv=None):
                 idx_err = max(abs(p["pitch_index"] / truth["body"]["pitch_dynamic_index"] - 1),
                               abs(p["roll_index"] / truth["body"]["roll_dynamic_index"] - 1))
             worst = {"k": max(worst["k"], k_err), "c": max(worst["c"], c_err), "index": max(worst["index"], idx_err)}
+            missed = {}
             if right:
                 for t in diag.channels:
                     ink = ci[f"k_{t}"][0] <= truth["tires"][t]["k"] <= ci[f"k_{t}"][1]
@@ -104,11 +105,15 @@ def main(argv=None):
                     cover["k"].append(ink)
                     cover["c"].append(inc)
                     cover["pair"].append(ink and inc)
+                    for q, inside in (("k", ink), ("c", inc)):
+                        if not inside:   # the miss in half-widths of the interval
+                            lo, hi = ci[f"{q}_{t}"]
+                            missed[f"{q}_{t}"] = round((p[f"{q}_{t}"] - truth["tires"][t][q]) / ((hi - lo) / 2), 2)
             left = [t for t, u in diag.unexplained.items() if u is not None]
             rows.append(dict(setting=name, seed=seed, speed_kmh=round(over["speed_kmh"], 1),
                              rate_hz=over["sensor.rate_hz"], noise=round(over["sensor.noise_m_s2"], 3),
                              effects=diag.effects, right_model=right, k_err=round(k_err, 4), c_err=round(c_err, 4),
-                             index_err=round(idx_err, 4), unexplained=left, seconds=round(wall, 1)))
+                             index_err=round(idx_err, 4), unexplained=left, missed=missed, seconds=round(wall, 1)))
             print(json.dumps(rows[-1]), flush=True)
     n = len(cover["k"])
     print()

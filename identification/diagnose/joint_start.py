@@ -57,8 +57,11 @@ def starting_values(pb: TractorProblem) -> dict:
     for tire in pb.channels:
         k, c = tire_start(pb, tire)
         start[f"k_{tire}"], start[f"c_{tire}"] = k, max(c, 50.0)
+    # a pivoting front axle's roll mode misread as the front tires' own: a timing's scaled values, if any
     start.update(joint_timing(pb, start, 0.0))
+    start.update(start.pop("front_tires", None) or {})
     start["enveloped"] = joint_timing(pb, start, ENVELOPE_GUESS_M)
+    start.update(start["enveloped"].pop("front_tires", None) or {})
     return start
 
 

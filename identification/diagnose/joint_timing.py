@@ -50,6 +50,9 @@ COARSE_S = 4e-3
 #: Window of the first (left or only side's front) arrival around the first detected burst, s.
 FIRST_WINDOW_S = (-0.35, 0.6)
 _STEP_S = 1e-3
+#: Front-to-rear ratio of the hubs' ringing frequencies (waveform fits) above which the front hubs are taken
+#: to possibly ring in a pivoting axle's roll mode.
+RING_RATIO = 2.0
 
 
 def body_hypotheses(pb: TractorProblem) -> list[tuple[tuple, dict]]:
@@ -64,6 +67,28 @@ def body_hypotheses(pb: TractorProblem) -> list[tuple[tuple, dict]]:
         out += [(("axle_coupling",), dict(BODY_DEFAULTS, pitch_index=p)) for p in PITCH_GRID]
     elif pb.both_sides:
         out += [(("roll_coupling",), dict(BODY_DEFAULTS, roll_index=r)) for r in ROLL_GRID]
+    return out
+
+
+def _tire_variants(pb: TractorProblem, start: dict, body: tuple, indices: dict) -> list[dict]:
+    """k, c overrides to try under a body hypothesis: none; and under a pivoting front axle, the front tires'
+    waveform k and c scaled by the pivot index.
+
+    The front hubs of a pivoting axle ring mostly in the axle's roll mode, p m θ'' + c θ' + k θ = 0 (p the
+    pivot index, m the corner mass): a fit of m z'' + c z' + k z = 0 to that ringing returns p⁻¹ k and
+    p⁻¹ c (seen: 9-11x the front tires' k).  Tried only where the front hubs ring over RING_RATIO times
+    faster than the rear ones (a tractor's front and rear tires ring at similar frequencies under their
+    corners; a pivot index of 0.03-0.1 puts the roll mode at 3-6x): a softer front tire's slower response
+    otherwise fits a footprint's gradual rise, or noise, about as well.
+    """
+    out = [{}]
+    fronts = [t for t in pb.channels if t in FRONT_TIRES]
+    rears = [t for t in pb.channels if t not in FRONT_TIRES]
+    if "front_axle_pivot" in body and fronts and rears and \
+            min(start[f"k_{t}"] / pb.rec.mass_kg(t) for t in fronts) > \
+            RING_RATIO ** 2 * max(start[f"k_{t}"] / pb.rec.mass_kg(t) for t in rears):
+        p = indices["pivot_index"]
+        out.append({f"{q}_{t}": start[f"{q}_{t}"] * p for t in pb.channels if t in FRONT_TIRES for q in "kc"})
     return out
 
 
@@ -185,7 +210,8 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
         ``arrival`` (the left or only side's front arrival, s), ``stagger``
         (right minus left, s) with both sides, ``delay`` (rear minus front, s)
         with both axles, and ``body``: the hypothesis that fitted best, as
-        ``(effects, indices)``.
+        ``(effects, indices)``; ``front_tires`` (k, c of the front tires) when that hypothesis fitted best
+        with the front tires' values scaled to a pivoting axle's roll mode (:func:`_tire_variants`).
     """
     rec = pb.rec
     fs, t = rec.sample_rate_hz, rec.time_s
@@ -197,16 +223,19 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
     for body, indices in (hypotheses or body_hypotheses(pb)):
         effects = body + (("enveloping",) if footprint_m else ())
         model = TractorFitModel(effects, pb)
-        theta = {name: start.get(name, indices.get(name, 0.0)) for name in model.names}
-        for name in model.names:
-            if name.startswith("footprint_"):
-                theta[name] = footprint_m
-        H = _responses(model, theta, index, before, length)
-        found = _search(pb, H, before)
-        if best is None or found[0] < best[0][0]:
-            best = (found, (body, indices))
-    (_, i, s, d), body = best
+        for scaled in _tire_variants(pb, start, body, indices):
+            theta = {name: {**start, **scaled}.get(name, indices.get(name, 0.0)) for name in model.names}
+            for name in model.names:
+                if name.startswith("footprint_"):
+                    theta[name] = footprint_m
+            H = _responses(model, theta, index, before, length)
+            found = _search(pb, H, before)
+            if best is None or found[0] < best[0][0]:
+                best = (found, (body, indices), scaled)
+    (_, i, s, d), body, scaled = best
     out = {"arrival": float(t[i])}
+    if scaled:
+        out["front_tires"] = scaled
     if pb.both_sides:
         out["stagger"] = float(s / fs)
     if pb.both_axles:
