@@ -108,7 +108,9 @@ def main(argv=None):
                     for q, inside in (("k", ink), ("c", inc)):
                         if not inside:   # the miss in half-widths of the interval
                             lo, hi = ci[f"{q}_{t}"]
-                            missed[f"{q}_{t}"] = round((p[f"{q}_{t}"] - truth["tires"][t][q]) / ((hi - lo) / 2), 2)
+                            half = (hi - lo) / 2
+                            missed[f"{q}_{t}"] = round((p[f"{q}_{t}"] - truth["tires"][t][q]) / half, 2) if half \
+                                else "zero-width interval"
             left = [t for t, u in diag.unexplained.items() if u is not None]
             rows.append(dict(setting=name, seed=seed, speed_kmh=round(over["speed_kmh"], 1),
                              rate_hz=over["sensor.rate_hz"], noise=round(over["sensor.noise_m_s2"], 3),

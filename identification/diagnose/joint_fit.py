@@ -199,6 +199,12 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
     sizes = [int(w.sum())] * len(pb.channels)
     lag = correlation_lag(pb.rec.sample_rate_hz, pb.cutoff_hz)
     cov = sandwich_covariance(jac, fun, sizes, lag) * (fun.size / dof)
+    # a parameter the residual does not depend on (a damping collapsed to zero) is not known to be anything:
+    # its interval is unbounded, not the zero width a pseudo-inverse gives it
+    norms = np.sqrt(np.sum(jac ** 2, axis=0)) if free else np.zeros(0)
+    blind = norms <= 1e-9 * (float(norms.max()) if norms.size else 0.0)
+    cov[blind, :] = cov[:, blind] = 0.0
+    cov[blind, blind] = math.inf
     q = float(stats.t.ppf(0.975, dof))
     if np.all(np.abs(shift) <= MAX_STEP_SHIFT):   # a larger move is no first-order correction: widen only
         x = x + shift

@@ -26,7 +26,7 @@ import numpy as np
 from ..recording import FRONT_TIRES
 from .joint_evidence import check_tractor
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
-from .joint_start import ENVELOPE_GUESS_M, body_start, refine_timing, starting_values
+from .joint_start import ENVELOPE_GUESS_M, body_start, enveloped_timings, refine_timing, starting_values
 from .joint_timing import BODY_DEFAULTS
 from .select import periodic_start
 from .tractor import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, parameter_unit
@@ -168,7 +168,9 @@ def _candidate_start(model: TractorFitModel, current: TractorFit, start0: dict) 
     for axle in pb.axles():
         s.setdefault(f"footprint_{axle}", ENVELOPE_GUESS_M)
     if "enveloping" in model.effects and "enveloping" not in current.model.effects:
-        s.update(start0["enveloped"])
+        options = [dict(s, **{n: t[n] for n in ("arrival", "stagger", "delay") if n in t})
+                   for t in enveloped_timings(start0)]
+        s = min(options, key=lambda o: sse_of(model, {n: o[n] for n in model.names}, SCREEN_STEP_S))
     if "periodic_disturbance" in model.effects and "periodic_disturbance" not in current.model.effects:
         arrivals = current.model.arrivals(current.params)
         for tire in pb.channels:
@@ -188,12 +190,17 @@ def _try(job):
     if set(new) & set(BODY_EFFECTS):
         # the current model's k (and timing) absorb the motion it lacks: scan around them and around the
         # waveform fits with the timing found under a coupled body
-        timing = start0["enveloped"] if "enveloping" in model.effects else start0
-        fresh = dict(start, **{n: start0[n] for n in model.names if n[:2] in ("k_", "c_")},
-                     **{n: timing[n] for n in ("arrival", "stagger", "delay") if n in model.names})
-        options = [body_start(model, s, step_s=SCREEN_STEP_S) for s in (start, fresh)]
-        start = min(options, key=lambda s: sse_of(model, s, SCREEN_STEP_S))
-    fit = fit_tractor(model, start, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET)
+        timings = enveloped_timings(start0) if "enveloping" in model.effects else [start0]
+        fresh = [dict(start, **{n: start0[n] for n in model.names if n[:2] in ("k_", "c_")},
+                      **{n: timing[n] for n in ("arrival", "stagger", "delay") if n in model.names})
+                 for timing in timings]
+        options = [body_start(model, s, step_s=SCREEN_STEP_S) for s in [start] + fresh]
+        # a scan cannot tell a wrong timing from a right one while the tires are still off (seen: the right
+        # timing's scan 2x the wrong one's, its fit 400x lower): fit every option
+        fits = [fit_tractor(model, s, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET) for s in options]
+        fit = min(fits, key=lambda f: (not f.in_bounds, f.weighted_sse()))
+    else:
+        fit = fit_tractor(model, start, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET)
     checks = [check_tractor(effect, fit, current) for effect in new]
     return TractorCandidate("+".join(new), fit, math.nan, math.nan, all(ok for ok, _ in checks), False,
                             {effect: text for effect, (_, text) in zip(new, checks)})

@@ -22,7 +22,7 @@ from ..waveform import identify_waveform
 from .joint_timing import joint_timing
 from .tractor import TractorProblem
 
-__all__ = ["tire_start", "starting_values", "body_start", "refine_timing", "ENVELOPE_GUESS_M"]
+__all__ = ["tire_start", "starting_values", "enveloped_timings", "body_start", "refine_timing", "ENVELOPE_GUESS_M"]
 
 def tire_start(pb: TractorProblem, tire: str) -> tuple[float, float]:
     """k (N/m) and c (N s/m) of one channel from the waveform fit, the paper's method, or its frequency."""
@@ -48,9 +48,11 @@ def starting_values(pb: TractorProblem) -> dict:
     """k, c per channel and the arrival, stagger and delay, from per-channel fits and a joint timing search.
 
     The timing (:func:`~identification.diagnose.joint_timing.joint_timing`) is
-    found twice: for point contact, and for tires enveloping the cleat with a
-    typical footprint (``enveloped`` holds the latter, the start of models
-    with ``enveloping``).  ``body`` and ``enveloped["body"]`` name the body
+    found for point contact, and for tires enveloping the cleat with a typical
+    footprint twice: freely (``enveloped``) and near the point-contact timing
+    (``enveloped_near``; with start values far off, the footprint's smooth
+    response can fit a wrong timing better).  Models with ``enveloping``
+    start from whichever fits them better.  ``body`` and ``enveloped["body"]`` name the body
     hypothesis and dynamic indices that placed the arrivals best.
     """
     start = {}
@@ -60,9 +62,17 @@ def starting_values(pb: TractorProblem) -> dict:
     # a pivoting front axle's roll mode misread as the front tires' own: a timing's scaled values, if any
     start.update(joint_timing(pb, start, 0.0))
     start.update(start.pop("front_tires", None) or {})
+    near = joint_timing(pb, start, ENVELOPE_GUESS_M, near=start)
     start["enveloped"] = joint_timing(pb, start, ENVELOPE_GUESS_M)
-    start.update(start["enveloped"].pop("front_tires", None) or {})
+    start["enveloped_near"] = near
+    for timing in (near, start["enveloped"]):
+        start.update(timing.pop("front_tires", None) or {})
     return start
+
+
+def enveloped_timings(start: dict) -> list[dict]:
+    """The timings found for tires enveloping the cleat: searched freely, and near the point-contact one."""
+    return [start["enveloped"]] + ([start["enveloped_near"]] if "enveloped_near" in start else [])
 
 
 #: Footprint of an enveloping start where none is scanned, m.

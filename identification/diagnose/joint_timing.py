@@ -50,6 +50,8 @@ COARSE_S = 4e-3
 #: Window of the first (left or only side's front) arrival around the first detected burst, s.
 FIRST_WINDOW_S = (-0.35, 0.6)
 _STEP_S = 1e-3
+#: Half-width of a search near an earlier timing, s.
+NEAR_S = 0.03
 #: Front-to-rear ratio of the hubs' ringing frequencies (waveform fits) above which the front hubs are taken
 #: to possibly ring in a pivoting axle's roll mode.
 RING_RATIO = 2.0
@@ -76,19 +78,20 @@ def _tire_variants(pb: TractorProblem, start: dict, body: tuple, indices: dict) 
 
     The front hubs of a pivoting axle ring mostly in the axle's roll mode, p m θ'' + c θ' + k θ = 0 (p the
     pivot index, m the corner mass): a fit of m z'' + c z' + k z = 0 to that ringing returns p⁻¹ k and
-    p⁻¹ c (seen: 9-11x the front tires' k).  Tried only where the front hubs ring over RING_RATIO times
+    p⁻¹ c (seen: 9-11x the front tires' k).  Tried for the front hubs that ring over RING_RATIO times
     faster than the rear ones (a tractor's front and rear tires ring at similar frequencies under their
     corners; a pivot index of 0.03-0.1 puts the roll mode at 3-6x): a softer front tire's slower response
     otherwise fits a footprint's gradual rise, or noise, about as well.
     """
     out = [{}]
-    fronts = [t for t in pb.channels if t in FRONT_TIRES]
     rears = [t for t in pb.channels if t not in FRONT_TIRES]
-    if "front_axle_pivot" in body and fronts and rears and \
-            min(start[f"k_{t}"] / pb.rec.mass_kg(t) for t in fronts) > \
-            RING_RATIO ** 2 * max(start[f"k_{t}"] / pb.rec.mass_kg(t) for t in rears):
-        p = indices["pivot_index"]
-        out.append({f"{q}_{t}": start[f"{q}_{t}"] * p for t in pb.channels if t in FRONT_TIRES for q in "kc"})
+    if "front_axle_pivot" in body and rears:
+        fastest_rear = max(start[f"k_{t}"] / pb.rec.mass_kg(t) for t in rears)
+        ringing = [t for t in pb.channels if t in FRONT_TIRES and
+                   start[f"k_{t}"] / pb.rec.mass_kg(t) > RING_RATIO ** 2 * fastest_rear]
+        if ringing:
+            p = indices["pivot_index"]
+            out.append({f"{q}_{t}": start[f"{q}_{t}"] * p for t in ringing for q in "kc"})
     return out
 
 
@@ -115,8 +118,9 @@ def _responses(model: TractorFitModel, theta: dict, index: int, before: int, len
     return out
 
 
-def _search(pb: TractorProblem, H: np.ndarray, before: int) -> tuple[float, int, int, int]:
-    """Best (score, first arrival index, stagger, delay in samples) for responses `H`."""
+def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None) -> tuple[float, int, int, int]:
+    """Best (score, first arrival index, stagger, delay in samples) for responses `H`; with `near`
+    ((arrival, stagger, delay) in samples, (arrival, stagger, delay) half-widths in samples) only there."""
     rec = pb.rec
     fs, n = rec.sample_rate_hz, rec.time_s.size
     m, _, length = H.shape
@@ -165,10 +169,14 @@ def _search(pb: TractorProblem, H: np.ndarray, before: int) -> tuple[float, int,
         return total
 
     step = max(1, int(round(COARSE_S * fs)))
-    i_range = np.arange(max(0, first + int(FIRST_WINDOW_S[0] * fs)), min(n, first + int(FIRST_WINDOW_S[1] * fs)), step)
-    s_range = np.arange(-int(MAX_STAGGER_S * fs), int(MAX_STAGGER_S * fs) + 1, step) if pb.both_sides else np.zeros(1, int)
-    d_range = (np.arange(int(DELAY_RANGE[0] * nominal * fs), int(DELAY_RANGE[1] * nominal * fs) + 1, step)
-               if pb.both_axles else np.zeros(1, int))
+    lo_hi = [(first + int(FIRST_WINDOW_S[0] * fs), first + int(FIRST_WINDOW_S[1] * fs)),
+             (-int(MAX_STAGGER_S * fs), int(MAX_STAGGER_S * fs)),
+             (int(DELAY_RANGE[0] * nominal * fs), int(DELAY_RANGE[1] * nominal * fs))]
+    if near is not None:
+        lo_hi = [(max(lo, c - w), min(hi, c + w)) for (lo, hi), c, w in zip(lo_hi, *near)]
+    i_range = np.arange(max(0, lo_hi[0][0]), min(n, lo_hi[0][1] + 1), step)
+    s_range = np.arange(lo_hi[1][0], lo_hi[1][1] + 1, step) if pb.both_sides else np.zeros(1, int)
+    d_range = np.arange(lo_hi[2][0], lo_hi[2][1] + 1, step) if pb.both_axles else np.zeros(1, int)
     every = np.arange(n)
     best = (math.inf, 0, 0, 0)
     for s in s_range:
@@ -191,7 +199,8 @@ def _search(pb: TractorProblem, H: np.ndarray, before: int) -> tuple[float, int,
     return float(sc.flat[j]), int(ii.flat[j]), int(ss.flat[j]), int(dd.flat[j])
 
 
-def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypotheses=None) -> dict:
+def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypotheses=None,
+                 near: dict | None = None) -> dict:
     """Arrival, stagger and delay of every channel at once, with the body's cross-talk.
 
     Parameters
@@ -203,6 +212,11 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
         Footprint of the tires enveloping the cleat (0: point contact).
     hypotheses : list of (tuple, dict), optional
         Body hypotheses (effects, indices) to try (default: :func:`body_hypotheses`).
+    near : dict, optional
+        A timing found before (``arrival``, ``stagger``, ``delay``, s): search only near it, the arrival
+        within the footprint's passage time (at least NEAR_S), stagger and delay within NEAR_S.  A
+        footprint moves every wheel's arrival alike; a search of its own would let start values that fit
+        the point-contact response poorly pull the footprint's smoother response elsewhere.
 
     Returns
     -------
@@ -219,6 +233,13 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
     before = int(math.ceil((lead + 0.02) * fs))
     length = before + int(round(RESPONSE_S * fs))
     index = min(t.size - 1, before + int(math.ceil(0.1 * fs)))
+    window = None
+    if near is not None:
+        centre = (int(round((near["arrival"] - t[0]) * fs)), int(round(near.get("stagger", 0.0) * fs)),
+                  int(round(near.get("delay", 0.0) * fs)))
+        half = (int(round(max(NEAR_S, footprint_m / rec.speed_m_s) * fs)), int(round(NEAR_S * fs)),
+                int(round(NEAR_S * fs)))
+        window = (centre, half)
     best = None
     for body, indices in (hypotheses or body_hypotheses(pb)):
         effects = body + (("enveloping",) if footprint_m else ())
@@ -229,7 +250,7 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
                 if name.startswith("footprint_"):
                     theta[name] = footprint_m
             H = _responses(model, theta, index, before, length)
-            found = _search(pb, H, before)
+            found = _search(pb, H, before, window)
             if best is None or found[0] < best[0][0]:
                 best = (found, (body, indices), scaled)
     (_, i, s, d), body, scaled = best

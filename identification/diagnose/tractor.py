@@ -285,8 +285,8 @@ class TractorFitModel:
             s = start[name]
             if base == "k":
                 lo[name], hi[name] = 0.2 * s, 5.0 * s
-            elif base == "c":
-                lo[name], hi[name] = 0.0, 5.0 * s + 2000.0
+            elif base == "c":   # a damping 1000x under the waveform fit's is a collapse, not a tire
+                lo[name], hi[name] = 1e-3 * s, 5.0 * s + 2000.0
             elif base in ("arrival", "stagger"):
                 lo[name], hi[name] = s - 0.2, s + 0.2
             elif base == "delay":
