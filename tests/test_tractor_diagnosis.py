@@ -124,6 +124,33 @@ def test_embedded_test_day_intervals_cover_the_truth(test_day):
     assert sum(inside) >= 14, inside
 
 
+#: A rigid tractor on enveloping tires at 500 Hz (a randomized draw of ``benchmarks/sweep_tractor.py``).
+COVERAGE_DRAW = {
+    "speed_kmh": 6.831284939745215, "sensor.rate_hz": 500.0, "sensor.noise_m_s2": 0.08513805924754243,
+    "tire.FL.k_N_m": 468383.1884270194, "tire.FL.c_Ns_m": 4200.201051931308,
+    "tire.FR.k_N_m": 595712.105362359, "tire.FR.c_Ns_m": 3375.802146733207,
+    "tire.RL.k_N_m": 358271.99409996025, "tire.RL.c_Ns_m": 2184.9571150684533,
+    "tire.RR.k_N_m": 448614.9522313389, "tire.RR.c_Ns_m": 2587.1719278925993,
+    "axle_coupling.pitch_dynamic_index": 0.7050435843137353, "axle_coupling.roll_gyration_m": 0.6297892372414362,
+    "cleat.stagger_m": 0.09637650717430575, "enveloping.footprint_front_m": 0.2845569346540256,
+    "enveloping.footprint_rear_m": 0.4082960998185291}
+
+
+def test_intervals_cover_the_truth_for_90_percent_of_48_pairs():
+    """Twelve recordings of one rigid tractor on enveloping tires (only the noise differs), each diagnosed
+    alone: the right model every time, and the 95 % intervals of k and c both hold the truth for >= 90 % of
+    the 48 (k, c) pairs.  (With exactly 95 % per interval, about 90 % of pairs.)"""
+    pairs = []
+    for seed in range(1000, 1012):
+        run = run_rig(("axle_coupling", "enveloping"), COVERAGE_DRAW, seed=seed)
+        diag = diagnose_tractor(run.recording, workers=1)
+        assert set(diag.effects) == {"enveloping", "axle_coupling", "roll_coupling"}, (seed, diag.effects)
+        assert not diag.conditional, seed
+        ci, truth = diag.final.ci, run.truth["tires"]
+        pairs += [all(ci[f"{q}_{t}"][0] <= truth[t][q] <= ci[f"{q}_{t}"][1] for q in "kc") for t in diag.channels]
+    assert len(pairs) == 48 and sum(pairs) >= 0.9 * 48, pairs
+
+
 def test_aligned_symmetric_corners_name_no_body_coupling():
     run = run_rig((), {"speed_kmh": 10.0, "sensor.rate_hz": 1000}, seed=2)
     diag = diagnose_tractor(run.recording, workers=1)
