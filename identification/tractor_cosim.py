@@ -30,7 +30,7 @@ from .cosim import TireFmu, fmi_error, step_fn
 from .diagnose.joint_fit import UNEXPLAINED_RATIO
 from .errors import InputError
 from .model import Cleat, TractorModel
-from .model.stepping import trajectory_from_arrays
+from .model.stepping import edge_jumps, step_lists, trajectory_from_arrays
 from .preprocess import DEFAULT_CUTOFF_HZ, lowpass
 from .recording import TIRES
 from .scheme import Trajectory, _equilibrium_corner
@@ -85,18 +85,10 @@ def step_body_fmus(tires, *, J, mass, static_z, loads_n, inputs, start_s: float,
     body of independent corners has one non-zero entry per row), the steps'
     values are kept in lists, and each tire's FMI arguments are allocated once.
     """
-    J = np.asarray(J, dtype=float)
-    nt, nq = J.shape
-    Jl = J.tolist()
+    nt, nq, Jl, minv, zs, W, (rz, rv, hx, hv), n, h, hh, hh2 = step_lists(J, mass, static_z, loads_n, inputs,
+                                                                            step_s)
     rows = [[(j, Jl[t][j]) for j in range(nq) if Jl[t][j] != 0.0] for t in range(nt)]
     cols = [[(t, Jl[t][j]) for t in range(nt) if Jl[t][j] != 0.0] for j in range(nq)]
-    minv = (1.0 / np.asarray(mass, dtype=float)).tolist()
-    zs = [float(v) for v in static_z]
-    W = [float(v) for v in loads_n]
-    rz, rv, hx, hv = (a.tolist() for a in (inputs.road_z, inputs.road_vz, inputs.hub_x, inputs.hub_vx))
-    n = len(rz[0])
-    h = float(step_s)
-    hh, hh2 = 0.5 * h, 0.5 * h * h
     q = [float(v) for v in q0]
     dq = [float(v) for v in dq0]
     Z, V, F, A = ([[0.0] * n for _ in range(nt)] for _ in range(4))
@@ -160,18 +152,7 @@ def step_body_fmus(tires, *, J, mass, static_z, loads_n, inputs, start_s: float,
             Z_t[i] = zt
         jq = no_jump
         if any_edge:
-            jq = [0.0] * nq
-            for j in range(nq):
-                s = 0.0
-                for t in range(nt):
-                    s += Jl[t][j] * (f[t] - fs[t])
-                jq[j] = h * minv[j] * s
-            for src in range(nt):
-                for hub in range(nt):
-                    s = 0.0
-                    for j in range(nq):
-                        s += Jl[hub][j] * (h * minv[j] * (Jl[src][j] * (f[src] - fs[src])))
-                    jumps[edge, src, hub] = s
+            jq = edge_jumps(Jl, minv, f, fs, h, jumps[edge])
             edge += 1
         for j, col, minv_j in columns:
             s = 0.0

@@ -10,12 +10,7 @@ from identification.cosim import TireFmu, step_fn
 from identification.model import Body, Cleat, TractorModel
 from identification.model.stepping import run_body, run_model_python
 
-TIRES = ("FL", "FR", "RL", "RR")
-LOADS = (11460.0, 11600.0, 15650.0, 15510.0)
-K = (550e3, 520e3, 420e3, 450e3)
-C = (4200.0, 4300.0, 2400.0, 2500.0)
-L, V, H, W = 2.77, 7 / 3.6, 0.04, 0.10
-ARRIVALS = (0.5013, 0.5013 + 0.11, 0.5013 + L / V, 0.5013 + L / V + 0.11)
+from tractor_cases import ARRIVALS, C, H, K, L, LOADS, TIRES, V, W  # noqa: F401
 #: FL and RL place a cleat themselves (footprint, built-in cleat); FR and RR get the cleat as the road,
 #: with its edges on grid points (impulses).
 BUILTIN = (True, False, True, False)

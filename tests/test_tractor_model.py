@@ -11,12 +11,7 @@ from identification.model.stepping import run_model_python
 from identification.preprocess import lowpass
 from identification.recording import STANDARD_GRAVITY
 
-TIRES = ("FL", "FR", "RL", "RR")
-LOADS = (11460.0, 11600.0, 15650.0, 15510.0)
-K = (550e3, 520e3, 420e3, 450e3)
-C = (4200.0, 4300.0, 2400.0, 2500.0)
-L, V, H, W = 2.77, 7 / 3.6, 0.04, 0.10
-ARRIVALS = (0.5013, 0.5013 + 0.11, 0.5013 + L / V, 0.5013 + L / V + 0.11)
+from tractor_cases import ARRIVALS, C, H, K, L, LOADS, TIRES, V, W  # noqa: F401
 BODIES = [dict(), dict(pitch=True), dict(roll=True), dict(pitch=True, roll=True),
           dict(pitch=True, roll=True, pivot=True)]
 

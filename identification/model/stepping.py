@@ -27,7 +27,7 @@ import numpy as np
 from ..scheme import Trajectory
 from .tractor import Inputs, TractorModel
 
-__all__ = ["run_body", "run_model_python", "trajectory_from_arrays"]
+__all__ = ["run_body", "run_model_python", "edge_jumps", "step_lists", "trajectory_from_arrays"]
 
 
 def run_body(forces, *, J, mass, static_z, loads_n, inputs: Inputs, start_s: float, step_s: float,
@@ -51,16 +51,8 @@ def run_body(forces, *, J, mass, static_z, loads_n, inputs: Inputs, start_s: flo
     before_step : callable, optional
         ``before_step(t_n, h)`` before each step.
     """
-    J = np.asarray(J, dtype=float)
-    nt, nq = J.shape
-    Jl = J.tolist()
-    minv = (1.0 / np.asarray(mass, dtype=float)).tolist()
-    zs = [float(v) for v in static_z]
-    W = [float(v) for v in loads_n]
-    rz, rv, hx, hv = (a.tolist() for a in (inputs.road_z, inputs.road_vz, inputs.hub_x, inputs.hub_vx))
-    n = len(rz[0])
-    h = float(step_s)
-    hh, hh2 = 0.5 * h, 0.5 * h * h
+    nt, nq, Jl, minv, zs, W, (rz, rv, hx, hv), n, h, hh, hh2 = step_lists(J, mass, static_z, loads_n, inputs,
+                                                                            step_s)
     q = [0.0] * nq if q0 is None else [float(v) for v in q0]
     dq = [0.0] * nq if dq0 is None else [float(v) for v in dq0]
     Z = np.empty((nt, n))
@@ -90,7 +82,7 @@ def run_body(forces, *, J, mass, static_z, loads_n, inputs: Inputs, start_s: flo
         for j in range(nq):
             s += Jl[t][j] * ddq[j]
         A[t, 0] = s
-    jq = [0.0] * nq
+    jq = no_jump = [0.0] * nq
     q1 = [0.0] * nq
     dqp = [0.0] * nq
     ddq1 = [0.0] * nq
@@ -116,20 +108,9 @@ def run_body(forces, *, J, mass, static_z, loads_n, inputs: Inputs, start_s: flo
                 f[t] = forces[t](zt, vt, hx[t][i], hv[t][i], rz[t][i], 0.0)
                 fs[t] = f[t]
             Z[t, i] = zt
-        for j in range(nq):
-            jq[j] = 0.0
+        jq = no_jump
         if any_edge:
-            for j in range(nq):
-                s = 0.0
-                for t in range(nt):
-                    s += Jl[t][j] * (f[t] - fs[t])
-                jq[j] = h * minv[j] * s
-            for src in range(nt):
-                for hub in range(nt):
-                    s = 0.0
-                    for j in range(nq):
-                        s += Jl[hub][j] * (h * minv[j] * (Jl[src][j] * (f[src] - fs[src])))
-                    jumps[edge, src, hub] = s
+            jq = edge_jumps(Jl, minv, f, fs, h, jumps[edge])
             edge += 1
         for j in range(nq):
             s = 0.0
@@ -147,6 +128,37 @@ def run_body(forces, *, J, mass, static_z, loads_n, inputs: Inputs, start_s: flo
                 at += Jl[t][j] * ddq[j]
             V[t, i], F[t, i], A[t, i] = vt, f[t], at
     return trajectory_from_arrays(Z, V, F, A, jumps, inputs=inputs, start_s=start_s, step_s=h, static_z=static_z)
+
+
+def step_lists(J, mass, static_z, loads_n, inputs: Inputs, step_s: float):
+    """The stepping's operands as Python lists and floats (a plain-Python loop is fastest on those):
+    (tires, coordinates, J rows, 1/mass, static heights, loads, (road z, road vz, hub x, hub vx), steps,
+    h, h/2, h²/2)."""
+    J = np.asarray(J, dtype=float)
+    nt, nq = J.shape
+    road = tuple(a.tolist() for a in (inputs.road_z, inputs.road_vz, inputs.hub_x, inputs.hub_vx))
+    h = float(step_s)
+    return (nt, nq, J.tolist(), (1.0 / np.asarray(mass, dtype=float)).tolist(), [float(v) for v in static_z],
+            [float(v) for v in loads_n], road, len(road[0][0]), h, 0.5 * h, 0.5 * h * h)
+
+
+def edge_jumps(Jl, minv, f, fs, h: float, jumps_row) -> list:
+    """A step holding cleat edges: the jump of the generalized velocities, h M⁻¹ Jᵀ (f − f_smooth), returned,
+    and each edge tire's share of every hub's velocity jump written into ``jumps_row[src, hub]``."""
+    nt, nq = len(Jl), len(minv)
+    jq = [0.0] * nq
+    for j in range(nq):
+        s = 0.0
+        for t in range(nt):
+            s += Jl[t][j] * (f[t] - fs[t])
+        jq[j] = h * minv[j] * s
+    for src in range(nt):
+        for hub in range(nt):
+            s = 0.0
+            for j in range(nq):
+                s += Jl[hub][j] * (h * minv[j] * (Jl[src][j] * (f[src] - fs[src])))
+            jumps_row[src, hub] = s
+    return jq
 
 
 def trajectory_from_arrays(Z, V, F, A, jumps, *, inputs: Inputs, start_s, step_s, static_z) -> Trajectory:
