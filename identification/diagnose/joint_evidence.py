@@ -2,7 +2,8 @@
 
 ``enveloping``          every fitted footprint ≥ 0.1 m, its interval above 0.05 m;
 ``lift_off``            the fitted model loses contact ≥ 15 ms on some tire, and the measured hub there
-                        is near free fall (mean within 0.35 g of −1 g; the body's rotation adds to it);
+                        is near free fall (mean within 0.35 g of −1 g) - or, on a coupled body (the other
+                        tires carry the hub), the model explains ≥ 50 % of the residual over that span;
 ``axle_coupling``       the other axle's impact shows in a channel (the extended model's residual there
                         ≥ 5× the noise), and the pitch index differs from 1 by ≥ 0.05, its interval excluding 1
                         (with ``roll_coupling``, the rigid body: the body explains ≥ 50 % of that cross-talk,
@@ -111,7 +112,17 @@ def _lift_off(fit, base):
     total = sum(b_ - a_ for spans in losses.values() for a_, b_ in spans)
     text = (f"{tire} hub at {mean_g:.2f} g for {(b - a) * 1e3:.0f} ms from t = {a:.3f} s "
             f"(contact lost {sum(map(len, losses.values()))}x, {total * 1e3:.0f} ms in all)")
-    return (b - a) >= 0.015 and abs(mean_g + 1.0) <= 0.35, text
+    if not set(fit.model.effects) & {"axle_coupling", "roll_coupling"}:
+        return (b - a) >= 0.015 and abs(mean_g + 1.0) <= 0.35, text
+    # on a coupled body the other tires carry the hub that lost contact: no free fall, but the unilateral
+    # model must explain what the hub does while its tire is off the ground
+    span = (t >= a) & (t <= b) & pb.window
+    rb = (pb.measured[tire] - base.prediction[tire])[span]
+    rf = (pb.measured[tire] - fit.prediction[tire])[span]
+    explained = 1.0 - float(rf @ rf) / max(float(rb @ rb), 1e-12) if span.any() else 0.0
+    text += (f"; the body carries the hub meanwhile (not free fall), and the unilateral tires explain "
+             f"{max(explained, 0.0):.0%} of the residual there")
+    return (b - a) >= 0.015 and explained >= 0.5, text
 
 
 def _axle(fit, base):
