@@ -142,7 +142,8 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
     the estimates move by the resulting first-order shift (the fit at the
     finer step) and each interval's half-width grows by that shift in
     quadrature, so the grid's own error is inside the interval.  The
-    prediction, residuals and NRMSE stay those of the fitted step.
+    prediction, residuals and NRMSE are those of the moved estimates at the
+    fitted step (what their FMUs give).
     """
     t0 = time.perf_counter()
     pb = model.problem
@@ -206,9 +207,13 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
     cov[blind, :] = cov[:, blind] = 0.0
     cov[blind, blind] = math.inf
     q = float(stats.t.ppf(0.975, dof))
-    if np.all(np.abs(shift) <= MAX_STEP_SHIFT):   # a larger move is no first-order correction: widen only
+    moved = bool(np.any(shift != 0.0) and np.all(np.abs(shift) <= MAX_STEP_SHIFT))
+    if moved:   # a larger move is no first-order correction: widen only
         x = x + shift
     params = theta_of(x)
+    if moved:   # the prediction (and its residual) of the parameters reported, as their FMUs will give it
+        pred = model.predict(params, step_s=step_s)
+        parts = _residual_parts(model, pred)
     ci = {}
     for i, (name, lg) in enumerate(zip(free, logs)):
         half = q * math.sqrt(max(0.0, float(cov[i, i])) + float(shift[i]) ** 2)
@@ -217,9 +222,9 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
         ci[name] = (value, value)
     for name in [n for n in params if n.startswith("lug_phase")]:
         wrapped = math.pi - (math.pi - params[name]) % (2 * math.pi)
-        shift = wrapped - params[name]
+        turn = wrapped - params[name]
         params[name] = wrapped
-        ci[name] = (ci[name][0] + shift, ci[name][1] + shift)
+        ci[name] = (ci[name][0] + turn, ci[name][1] + turn)
     in_bounds = not failed and all(lo[n] <= params[n] <= hi[n] for n in free)
     sse = {c: float(r @ r) for c, r in parts.items()}
     nrmse = {c: float(np.sqrt(np.mean(parts[c] ** 2)) / np.sqrt(np.mean(pb.measured[c][w] ** 2)))
