@@ -164,10 +164,20 @@ def plot_tractor_diagnosis(diag, *, nrmse_before=None, nrmse_after=None):
         if left:
             ax.axvspan(*left["window"], color="#f4c27a", alpha=0.35,
                        label=f"unexplained {left['share']:.1%} of the signal")
-        ax.set_ylabel("m/s²")
-        _limit_to(ax, pb.measured[ch][w])
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right")
-    axes[0, 0].set_title(f"{pb.rec.source}: effects found: {label}", fontsize=9)
+        finish_channel_axis(ax, pb.measured[ch][w])
+    return finish_channel_figure(fig, axes, f"{pb.rec.source}: effects found: {label}")
+
+
+def finish_channel_axis(ax, measured) -> None:
+    """One channel's axis of a per-channel figure: units, y scaled to the measurement, grid, legend."""
+    ax.set_ylabel("m/s²")
+    _limit_to(ax, measured)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="upper right")
+
+
+def finish_channel_figure(fig, axes, title: str):
+    """A per-channel figure's title (on top) and time axis (at the bottom); returns the figure."""
+    axes[0, 0].set_title(title, fontsize=9)
     axes[-1, 0].set_xlabel("time / s")
     return fig

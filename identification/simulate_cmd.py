@@ -77,7 +77,7 @@ def _tractor_text(sim) -> str:
 
 def _plot_tractor(sim):
     """Every channel: measured vs co-simulated (both low-passed) over the diagnosis window."""
-    from .plots import _limit_to, figure
+    from .plots import figure, finish_channel_axis, finish_channel_figure
 
     pb = sim.problem
     t, w = pb.rec.time_s, pb.window
@@ -87,13 +87,8 @@ def _plot_tractor(sim):
         ax.plot(t[w], pb.measured[ch][w], color="C0", lw=1.0, label=f"{ch} measured (low-pass)")
         ax.plot(t[w], sim.predicted[ch][w], color="C3", lw=0.8,
                 label=f"FMU co-simulation, NRMSE {sim.nrmse[ch]:.1%} (noise {sim.noise_nrmse[ch]:.1%})")
-        ax.set_ylabel("m/s²")
-        _limit_to(ax, pb.measured[ch][w])
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right")
-    axes[0, 0].set_title(f"{pb.rec.source}: four tire FMUs under the body ({sim.body['kind']})", fontsize=9)
-    axes[-1, 0].set_xlabel("time / s")
-    return fig
+        finish_channel_axis(ax, pb.measured[ch][w])
+    return finish_channel_figure(fig, axes, f"{pb.rec.source}: four tire FMUs under the body ({sim.body['kind']})")
 
 
 def _save_plot(fig, path) -> None:
