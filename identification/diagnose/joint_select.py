@@ -26,7 +26,8 @@ import numpy as np
 from ..recording import FRONT_TIRES
 from .joint_evidence import check_tractor
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
-from .joint_start import ENVELOPE_GUESS_M, body_start, enveloped_timings, refine_timing, starting_values
+from .joint_start import (ENVELOPE_GUESS_M, body_start, enveloped_timings, refine_timing, rescue_start,
+                          starting_values)
 from .joint_timing import BODY_DEFAULTS
 from .select import periodic_start
 from .tractor import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, parameter_unit
@@ -219,6 +220,15 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
                      channels=None) -> TractorDiagnosis:
     """Diagnose every channel of a recording jointly under one body.
 
+    The selection starts from the per-channel waveform fits and the joint
+    timing search (:func:`~identification.diagnose.joint_start.starting_values`).
+    When its final model still leaves some channel's residual over RESCUE_RATIO
+    times the noise (a wrong arrival: the right model from the right timing
+    leaves a few times the noise at most), the selection runs again from a
+    timing searched with each axle's k scaled
+    (:func:`~identification.diagnose.joint_start.rescue_start`), and the run
+    with the lower BIC is kept (``extra["rescue"]`` says which).
+
     Parameters
     ----------
     rec : Recording
@@ -240,47 +250,80 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     pb = TractorProblem.from_recording(rec, cutoff_hz=cutoff_hz, channels=channels)
     tick("starting values")
     start0 = starting_values(pb)
-    tick("baseline")
-    base_model = TractorFitModel((), pb)
-    baseline = fit_tractor(base_model, refine_timing(base_model, {n: start0[n] for n in base_model.names}),
-                           budget=FINAL_BUDGET)
     n = int(pb.window.sum()) * len(pb.channels)
     n_eff = n * min(1.0, 2 * cutoff_hz / rec.sample_rate_hz)
-    current, selected, rounds, evidence = baseline, [], [], {}
     pool = _pool(workers)
     try:
-        while len(selected) < MAX_EFFECTS:
-            tries = [(e,) for e in effects if e not in selected and pb.available(e, selected)]
-            if ("axle_coupling",) in tries and ("roll_coupling",) in tries and len(pb.channels) == 4:
-                # the rigid tractor in one step; and with the footprint, which on a tractor that rolls and
-                # pitches is often needed at the same time before either alone fits at all
-                bodies = [("axle_coupling", "roll_coupling")]
-                if "front_axle_pivot" in effects:
-                    bodies.append(("axle_coupling", "roll_coupling", "front_axle_pivot"))
-                tries += bodies
-                if ("enveloping",) in tries:
-                    tries += [("enveloping",) + body for body in bodies]
-            if not tries:
-                break
-            jobs = [(selected + list(new), current, new, start0) for new in tries]
-            current_sse = sse_of(current.model, current.params, SCREEN_STEP_S)
-            rnd = []
-            for cand in (pool.map(_try, jobs) if pool else map(_try, jobs)):
-                tick(cand.fit.label)
-                rnd.append(_judge(cand, current_sse, len(current.model.names), n, n_eff))
-            rnd.sort(key=lambda c: (c.effect.count("+"), EFFECTS.index(c.effect.split("+")[0])))
-            rounds.append(rnd)
-            best = max((c for c in rnd if c.qualified), key=lambda c: c.delta_bic, default=None)
-            if best is None:
-                break
-            tick(f"refit {best.fit.label}")
-            current = fit_tractor(best.fit.model, refine_timing(best.fit.model, best.fit.params),
-                                  budget=FINAL_BUDGET)
-            selected += best.effect.split("+")
-            evidence.update(best.evidence)
+        run = _select(pb, start0, effects, pool, tick, n, n_eff)
+        rescue = None
+        if max(_residual_to_noise(run)) > RESCUE_RATIO and len(pb.channels) > 1:
+            tick("rescue: starting values with scaled stiffness")
+            start1 = rescue_start(pb, start0)
+            second = _select(pb, start1, effects, pool, tick, n, n_eff)
+            better = _final_bic(second, n, n_eff) < _final_bic(run, n, n_eff)
+            rescue = {"residual_to_noise_before": max(_residual_to_noise(run)),
+                      "residual_to_noise_after": max(_residual_to_noise(second)), "kept": bool(better)}
+            if better:
+                run, start0 = second, start1
     finally:
         if pool:
             pool.shutdown()
+    return TractorDiagnosis(problem=pb, effects=run["selected"], baseline=run["baseline"], final=run["final"],
+                            rounds=run["rounds"], evidence=run["evidence"], unexplained=run["unexplained"],
+                            seconds=time.perf_counter() - t0,
+                            extra={"n_eff": n_eff, "start": start0, "rescue": rescue})
+
+
+#: A channel residual over this many times its noise RMS after the selection triggers the rescue.
+RESCUE_RATIO = 10.0
+
+
+def _residual_to_noise(run: dict) -> list:
+    return [v["residual_to_noise"] if v else 0.0 for v in run["unexplained"].values()]
+
+
+def _final_bic(run: dict, n: int, n_eff: float) -> float:
+    final = run["final"]
+    return _bic(final.weighted_sse(), n, n_eff, len(final.model.names))
+
+
+def _select(pb: TractorProblem, start0: dict, effects, pool, tick, n: int, n_eff: float) -> dict:
+    """One forward selection from the starting values `start0`, the named model's final fit and what it
+    leaves unexplained."""
+    tick("baseline")
+    base_model = TractorFitModel((), pb)
+    baseline = fit_tractor(base_model, refine_timing(base_model, {n_: start0[n_] for n_ in base_model.names}),
+                           budget=FINAL_BUDGET)
+    current, selected, rounds, evidence = baseline, [], [], {}
+    while len(selected) < MAX_EFFECTS:
+        tries = [(e,) for e in effects if e not in selected and pb.available(e, selected)]
+        if ("axle_coupling",) in tries and ("roll_coupling",) in tries and len(pb.channels) == 4:
+            # the rigid tractor in one step; and with the footprint, which on a tractor that rolls and
+            # pitches is often needed at the same time before either alone fits at all
+            bodies = [("axle_coupling", "roll_coupling")]
+            if "front_axle_pivot" in effects:
+                bodies.append(("axle_coupling", "roll_coupling", "front_axle_pivot"))
+            tries += bodies
+            if ("enveloping",) in tries:
+                tries += [("enveloping",) + body for body in bodies]
+        if not tries:
+            break
+        jobs = [(selected + list(new), current, new, start0) for new in tries]
+        current_sse = sse_of(current.model, current.params, SCREEN_STEP_S)
+        rnd = []
+        for cand in (pool.map(_try, jobs) if pool else map(_try, jobs)):
+            tick(cand.fit.label)
+            rnd.append(_judge(cand, current_sse, len(current.model.names), n, n_eff))
+        rnd.sort(key=lambda c: (c.effect.count("+"), EFFECTS.index(c.effect.split("+")[0])))
+        rounds.append(rnd)
+        best = max((c for c in rnd if c.qualified), key=lambda c: c.delta_bic, default=None)
+        if best is None:
+            break
+        tick(f"refit {best.fit.label}")
+        current = fit_tractor(best.fit.model, refine_timing(best.fit.model, best.fit.params),
+                              budget=FINAL_BUDGET)
+        selected += best.effect.split("+")
+        evidence.update(best.evidence)
     if current.model.has_sharp_edges:   # the final fit with the cleat edges resolved for the anti-alias filter
         tick(f"refit {current.label}, edges resolved")
         fine = TractorFitModel(current.model.effects, pb, resolve_edges=True)
@@ -288,6 +331,5 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     else:   # the named model once more from its optimum, with the grid step checked
         current = fit_tractor(current.model, current.params, budget=FINAL_BUDGET, step_check=True)
     left = {c: unexplained(pb, current.prediction, c) for c in pb.channels}
-    return TractorDiagnosis(problem=pb, effects=selected, baseline=baseline, final=current, rounds=rounds,
-                            evidence=evidence, unexplained=left, seconds=time.perf_counter() - t0,
-                            extra={"n_eff": n_eff, "start": start0})
+    return {"baseline": baseline, "final": current, "selected": selected, "rounds": rounds,
+            "evidence": evidence, "unexplained": left}

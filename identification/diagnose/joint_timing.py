@@ -23,6 +23,7 @@ import dataclasses
 import math
 
 import numpy as np
+from scipy.signal import fftconvolve
 
 from ..acquisition import sensed_acceleration
 from ..model.kernels import run_model
@@ -30,7 +31,7 @@ from ..preprocess import lowpass
 from ..recording import FRONT_TIRES
 from .tractor import TractorFitModel, TractorProblem
 
-__all__ = ["joint_timing", "BODY_DEFAULTS", "MAX_STAGGER_S", "DELAY_RANGE"]
+__all__ = ["joint_timing", "scaled_timing", "BODY_DEFAULTS", "MAX_STAGGER_S", "DELAY_RANGE"]
 
 #: Dynamic indices of the body hypotheses (a typical tractor).
 BODY_DEFAULTS = {"pitch_index": 0.9, "roll_index": 0.6, "pivot_index": 0.1}
@@ -52,6 +53,8 @@ FIRST_WINDOW_S = (-0.35, 0.6)
 _STEP_S = 1e-3
 #: Half-width of a search near an earlier timing, s.
 NEAR_S = 0.03
+#: Per-axle stiffness multipliers of :func:`scaled_timing`.
+STIFFNESS_MULTIPLIERS = (0.55, 0.8, 1.0, 1.25)
 #: Front-to-rear ratio of the hubs' ringing frequencies (waveform fits) above which the front hubs are taken
 #: to possibly ring in a pivoting axle's roll mode.
 RING_RATIO = 2.0
@@ -131,12 +134,12 @@ def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None) -> tuple[
     # linear terms: lin[w, a] = Σ_c <y_c, H[w, c](· − a)>, arrival a = sample index (the response starts `before` earlier)
     lin = np.full((m, n), -np.inf)
     for w in range(m):
-        corr = sum(np.correlate(ypad[c], H[w, c], mode="valid") for c in range(m))   # index: a − before
+        corr = fftconvolve(ypad, H[w, :, ::-1], mode="valid", axes=1).sum(axis=0)   # index: a − before
         a = np.arange(n)
         ok = (a - before >= 0) & (a - before < corr.size)
         lin[w, ok] = corr[a[ok] - before]
     # cross terms: cross[w, v][lag + length − 1] = Σ_c Σ_j H[w, c, j] H[v, c, j − lag], lag = a_v − a_w
-    cross = {(w, v): sum(np.correlate(H[w, c], H[v, c], mode="full") for c in range(m))
+    cross = {(w, v): fftconvolve(H[w], H[v, :, ::-1], mode="full", axes=1).sum(axis=0)
              for w in range(m) for v in range(w + 1, m)}
     energy = float(sum(np.sum(H[w] ** 2) for w in range(m)))
 
@@ -153,10 +156,11 @@ def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None) -> tuple[
     first = int(round((min(pb.onsets[c] - (nominal if rear[w] else 0.0) for w, c in enumerate(pb.channels))
                        - rec.time_s[0]) * fs))
 
-    def at(w, idx):   # lin[w, idx], -inf outside the record
-        idx = np.asarray(idx)
-        inside = (idx >= 0) & (idx < n)
-        return np.where(inside, lin[w, np.clip(idx, 0, n - 1)], -np.inf)
+    # lin padded by n on either side (-inf: outside the record), so that shifted indices need no clipping
+    linpad = np.concatenate([np.full((m, n), -np.inf), lin, np.full((m, n), -np.inf)], axis=1)
+
+    def at(w, idx):   # lin[w, idx], -inf outside the record (|idx| within n of it)
+        return linpad[w, np.asarray(idx) + n]
 
     def cross_at(s, d):   # zero with a single channel (no pair)
         return sum((2 * q(w, v, (right[v] - right[w]) * s + (rear[v] - rear[w]) * d) for (w, v) in cross),
@@ -177,14 +181,14 @@ def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None) -> tuple[
     i_range = np.arange(max(0, lo_hi[0][0]), min(n, lo_hi[0][1] + 1), step)
     s_range = np.arange(lo_hi[1][0], lo_hi[1][1] + 1, step) if pb.both_sides else np.zeros(1, int)
     d_range = np.arange(lo_hi[2][0], lo_hi[2][1] + 1, step) if pb.both_axles else np.zeros(1, int)
-    every = np.arange(n)
+    every = np.arange(-n, n)   # the rear arrivals, i + d, as indices into `back` (offset n)
     best = (math.inf, 0, 0, 0)
     for s in s_range:
         front = sum((at(w, i_range + right[w] * s) for w in range(m) if not rear[w]), np.zeros(i_range.size))
-        back = sum((at(w, every + right[w] * s) for w in range(m) if rear[w]), np.zeros(n))
-        idx = i_range[None, :] + d_range[:, None]
-        sc = (energy + cross_at(s, d_range)[:, None]
-              - 2 * (front[None, :] + np.where(idx < n, back[np.clip(idx, 0, n - 1)], -np.inf)))
+        back = np.append(sum((at(w, every + right[w] * s) for w in range(m) if rear[w]), np.zeros(2 * n)),
+                         -np.inf)
+        idx = np.minimum(i_range[None, :] + d_range[:, None] + n, 2 * n)   # beyond the record: -inf
+        sc = energy + cross_at(s, d_range)[:, None] - 2 * (front[None, :] + back[idx])
         j = int(np.argmin(sc))
         if sc.flat[j] < best[0]:
             di, ii = np.unravel_index(j, sc.shape)
@@ -225,7 +229,9 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
         (right minus left, s) with both sides, ``delay`` (rear minus front, s)
         with both axles, and ``body``: the hypothesis that fitted best, as
         ``(effects, indices)``; ``front_tires`` (k, c of the front tires) when that hypothesis fitted best
-        with the front tires' values scaled to a pivoting axle's roll mode (:func:`_tire_variants`).
+        with the front tires' values scaled to a pivoting axle's roll mode (:func:`_tire_variants`);
+        ``score``: the squared misfit less the measurement's energy (comparable between calls on one
+        problem).
     """
     rec = pb.rec
     fs, t = rec.sample_rate_hz, rec.time_s
@@ -253,8 +259,8 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
             found = _search(pb, H, before, window)
             if best is None or found[0] < best[0][0]:
                 best = (found, (body, indices), scaled)
-    (_, i, s, d), body, scaled = best
-    out = {"arrival": float(t[i])}
+    (score, i, s, d), body, scaled = best
+    out = {"arrival": float(t[i]), "score": score}
     if scaled:
         out["front_tires"] = scaled
     if pb.both_sides:
@@ -263,3 +269,28 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
         out["delay"] = float(d / fs)
     out["body"] = body
     return out
+
+
+def scaled_timing(pb: TractorProblem, start: dict, footprint_m: float, hypotheses=None,
+                  multipliers=STIFFNESS_MULTIPLIERS) -> dict:
+    """The timing (:func:`joint_timing`) with each axle's k scaled over `multipliers` (c keeping its damping
+    ratio): the best-scoring, with the scaled k, c as ``tires``.  About 16x the cost of one search.
+
+    A tire's waveform fit can be far off under a coupled body (seen: a rear k twice the rig's), and a
+    response ringing at the wrong frequency then matches a wrong arrival better than the right one; scaled
+    to the right frequency, the impacts fall into place.
+    """
+    best = None
+    fronts = any(t in FRONT_TIRES for t in pb.channels)
+    rears = any(t not in FRONT_TIRES for t in pb.channels)
+    for mf in (multipliers if fronts else (1.0,)):
+        for mr in (multipliers if rears else (1.0,)):
+            tires = {}
+            for t in pb.channels:
+                m = mf if t in FRONT_TIRES else mr
+                tires[f"k_{t}"], tires[f"c_{t}"] = start[f"k_{t}"] * m, start[f"c_{t}"] * math.sqrt(m)
+            found = joint_timing(pb, {**start, **tires}, footprint_m, hypotheses=hypotheses)
+            tires.update(found.pop("front_tires", None) or {})
+            if best is None or found["score"] < best["score"]:
+                best = dict(found, tires=tires)
+    return best
