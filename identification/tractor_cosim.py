@@ -85,8 +85,8 @@ def step_body_fmus(tires, *, J, mass, static_z, loads_n, inputs, start_s: float,
     body of independent corners has one non-zero entry per row), the steps'
     values are kept in lists, and each tire's FMI arguments are allocated once.
     """
-    nt, nq, Jl, minv, zs, W, (rz, rv, hx, hv), n, h, hh, hh2 = step_lists(J, mass, static_z, loads_n, inputs,
-                                                                            step_s)
+    nt, nq, Jl, minv, zs, W, (rz, rv, hx, hv, em), n, h, hh, hh2 = step_lists(J, mass, static_z, loads_n,
+                                                                                inputs, step_s)
     rows = [[(j, Jl[t][j]) for j in range(nq) if Jl[t][j] != 0.0] for t in range(nt)]
     cols = [[(t, Jl[t][j]) for t in range(nt) if Jl[t][j] != 0.0] for j in range(nq)]
     q = [float(v) for v in q0]
@@ -117,7 +117,7 @@ def step_body_fmus(tires, *, J, mass, static_z, loads_n, inputs, start_s: float,
             s += Jtj * ddq[j]
         A[t][0] = s
     # per tire: its index, static height, row of J, inputs, FMI exchange (see TireFmu.force_fn) and outputs
-    per_tire = [(t, zs[t], rows[t], rz[t], rv[t], hx[t], hv[t], *tire.exchange_args(), Z[t])
+    per_tire = [(t, zs[t], rows[t], rz[t], rv[t], em[t], hx[t], hv[t], *tire.exchange_args(), Z[t])
                 for t, tire in enumerate(tires)]
     columns = list(zip(range(nq), cols, minv))
     jq = no_jump = (0.0,) * nq
@@ -130,18 +130,18 @@ def step_body_fmus(tires, *, J, mass, static_z, loads_n, inputs, start_s: float,
             dqp[j] = dq[j] + h * ddq[j] - 0.5 * jq[j]
         do_steps(start_s + (i - 1) * h, h)
         any_edge = False
-        for t, zt, row, rz_t, rv_t, hx_t, hv_t, set_real, get_real, c, vrs, n_in, values, f_vr, one, out, Z_t \
-                in per_tire:
+        for t, zt, row, rz_t, rv_t, em_t, hx_t, hv_t, set_real, get_real, c, vrs, n_in, values, f_vr, one, out, \
+                Z_t in per_tire:
             vt = 0.0
             for j, Jtj in row:
                 zt += Jtj * q1[j]
                 vt += Jtj * dqp[j]
-            if rv_t[i] != 0.0:
+            if em_t[i]:
                 any_edge = True
                 fs[t] = forces[t](zt, vt, hx_t[i], hv_t[i], rz_t[i], 0.0)
                 f[t] = forces[t](zt, vt, hx_t[i], hv_t[i], rz_t[i], rv_t[i])
             else:
-                values[:] = (zt, vt, rz_t[i], 0.0, hx_t[i], hv_t[i])
+                values[:] = (zt, vt, rz_t[i], rv_t[i], hx_t[i], hv_t[i])
                 status = set_real(c, vrs, n_in, values)
                 if status > 1:  # above fmi2Warning: failed
                     raise fmi_error("fmi2SetReal", status)

@@ -30,7 +30,7 @@ def available() -> bool:
     return numba is not None
 
 
-def _step(J, minv, zs, W, rz, rv, hx, hv, Q, q0, dq0, h, points):
+def _step(J, minv, zs, W, rz, rv, hx, hv, em, Q, q0, dq0, h, points):
     nt, nq = J.shape
     n = rz.shape[1]
     hh, hh2 = 0.5 * h, 0.5 * h * h
@@ -79,12 +79,12 @@ def _step(J, minv, zs, W, rz, rv, hx, hv, Q, q0, dq0, h, points):
             for j in range(nq):
                 zt += J[t, j] * q1[j]
                 vt += J[t, j] * dqp[j]
-            if rv[t, i] != 0.0:
+            if em[t, i]:
                 any_edge = True
                 fs[t] = _force(zt, vt, hx[t, i], hv[t, i], rz[t, i], 0.0, Q[t])
                 f[t] = _force(zt, vt, hx[t, i], hv[t, i], rz[t, i], rv[t, i], Q[t])
             else:
-                f[t] = _force(zt, vt, hx[t, i], hv[t, i], rz[t, i], 0.0, Q[t])
+                f[t] = _force(zt, vt, hx[t, i], hv[t, i], rz[t, i], rv[t, i], Q[t])
                 fs[t] = f[t]
             Z[t, i] = zt
         for j in range(nq):
@@ -160,7 +160,7 @@ def run_model(model: TractorModel, start_s: float, step_s: float, n: int) -> Tra
     J, mass, static_z, loads, inputs, q0, dq0 = prepared(model, start_s, step_s, n)
     Z, V, F, A, jumps = _step(np.ascontiguousarray(J, dtype=float), 1.0 / np.asarray(mass, dtype=float),
                               np.asarray(static_z, dtype=float), loads, inputs.road_z, inputs.road_vz,
-                              inputs.hub_x, inputs.hub_vx, model.law_matrix(), np.asarray(q0, dtype=float),
+                              inputs.hub_x, inputs.hub_vx, inputs.edge_mask, model.law_matrix(), np.asarray(q0, dtype=float),
                               np.asarray(dq0, dtype=float), float(step_s), inputs.edge_points)
     return trajectory_from_arrays(Z, V, F, A, jumps, inputs=inputs, start_s=start_s, step_s=step_s,
                                   static_z=static_z)

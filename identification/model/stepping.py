@@ -51,8 +51,8 @@ def run_body(forces, *, J, mass, static_z, loads_n, inputs: Inputs, start_s: flo
     before_step : callable, optional
         ``before_step(t_n, h)`` before each step.
     """
-    nt, nq, Jl, minv, zs, W, (rz, rv, hx, hv), n, h, hh, hh2 = step_lists(J, mass, static_z, loads_n, inputs,
-                                                                            step_s)
+    nt, nq, Jl, minv, zs, W, (rz, rv, hx, hv, em), n, h, hh, hh2 = step_lists(J, mass, static_z, loads_n,
+                                                                                inputs, step_s)
     q = [0.0] * nq if q0 is None else [float(v) for v in q0]
     dq = [0.0] * nq if dq0 is None else [float(v) for v in dq0]
     Z = np.empty((nt, n))
@@ -100,12 +100,12 @@ def run_body(forces, *, J, mass, static_z, loads_n, inputs: Inputs, start_s: flo
             for j in range(nq):
                 zt += Jl[t][j] * q1[j]
                 vt += Jl[t][j] * dqp[j]
-            if rv[t][i] != 0.0:
+            if em[t][i]:
                 any_edge = True
                 fs[t] = forces[t](zt, vt, hx[t][i], hv[t][i], rz[t][i], 0.0)
                 f[t] = forces[t](zt, vt, hx[t][i], hv[t][i], rz[t][i], rv[t][i])
             else:
-                f[t] = forces[t](zt, vt, hx[t][i], hv[t][i], rz[t][i], 0.0)
+                f[t] = forces[t](zt, vt, hx[t][i], hv[t][i], rz[t][i], rv[t][i])
                 fs[t] = f[t]
             Z[t, i] = zt
         jq = no_jump
@@ -132,11 +132,12 @@ def run_body(forces, *, J, mass, static_z, loads_n, inputs: Inputs, start_s: flo
 
 def step_lists(J, mass, static_z, loads_n, inputs: Inputs, step_s: float):
     """The stepping's operands as Python lists and floats (a plain-Python loop is fastest on those):
-    (tires, coordinates, J rows, 1/mass, static heights, loads, (road z, road vz, hub x, hub vx), steps,
-    h, h/2, h²/2)."""
+    (tires, coordinates, J rows, 1/mass, static heights, loads, (road z, road vz, hub x, hub vx, edge mask),
+    steps, h, h/2, h²/2)."""
     J = np.asarray(J, dtype=float)
     nt, nq = J.shape
-    road = tuple(a.tolist() for a in (inputs.road_z, inputs.road_vz, inputs.hub_x, inputs.hub_vx))
+    road = tuple(a.tolist() for a in (inputs.road_z, inputs.road_vz, inputs.hub_x, inputs.hub_vx,
+                                      inputs.edge_mask))
     h = float(step_s)
     return (nt, nq, J.tolist(), (1.0 / np.asarray(mass, dtype=float)).tolist(), [float(v) for v in static_z],
             [float(v) for v in loads_n], road, len(road[0][0]), h, 0.5 * h, 0.5 * h * h)

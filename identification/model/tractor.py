@@ -214,7 +214,11 @@ class Cleat:
 
 @dataclass(frozen=True, eq=False)
 class Inputs:
-    """Per-grid-point inputs of every tire (arrays tires × n) and the point-contact edges."""
+    """Per-grid-point inputs of every tire (arrays tires × n) and the point-contact edges.
+
+    ``road_vz`` is the road's rate: at an edge point (``edge_mask``) the ramp's rate ±H/h, which the
+    stepping applies as a velocity jump; elsewhere the rate of a smooth road (zero around a cleat).
+    """
 
     road_z: np.ndarray
     road_vz: np.ndarray
@@ -225,6 +229,15 @@ class Inputs:
     @property
     def edge_points(self) -> np.ndarray:
         return np.array(sorted({i for i, _, _ in self.edges}), dtype=np.int64)
+
+    @property
+    def edge_mask(self) -> np.ndarray:
+        """True where a tire's grid point holds one of its edges (tires × n): there `road_vz` is the ramp's
+        rate, applied as an impulse; elsewhere it is the smooth road's rate (zero on a cleat)."""
+        mask = np.zeros(self.road_z.shape, dtype=np.bool_)
+        for i, j, _ in self.edges:
+            mask[j, i] = True
+        return mask
 
 
 def cleat_inputs(start_s: float, step_s: float, n: int, *, arrival_s: float, cleat: Cleat, external: bool,
