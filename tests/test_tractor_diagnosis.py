@@ -181,3 +181,28 @@ def test_cli_whole_tractor_json_and_one_fmu_per_tire(cli, tmp_path):
     assert all(validate_fmu(str(p)) == [] for p in paths)
     bad = cli("diagnose", csv_path, "--fmu", tmp_path / "x.fmu")
     assert bad.code == 2 and "--tire" in bad.err and len(bad.err.strip().splitlines()) == 1
+
+
+def test_the_diagnosed_tractor_rides_like_the_rigs_on_an_iso_8608_road(test_day):
+    """Seat a_w (ISO 2631-1 Wk) on a class B road at the test day's speed: the final parameter set under the
+    diagnosed body against the rig's own tires and body (its truth, read by the test only)."""
+    from identification.comfort.ride import ROAD_SPACING_M, parameter_sets, ride
+    from identification.comfort.road import road_profile
+    from identification.model.tractor import Body
+
+    truth, diag = test_day["testday_7kmh"]
+    rec = diag.problem.rec
+    body, sets, how = parameter_sets(rec, ["paper", "final", "static=300e3"], diagnosis=diag)
+    assert how == "diagnosed (rigid)"
+    tires = ("FL", "FR", "RL", "RR")
+    rig_body = Body(tires, tuple(truth["tires"][t]["load_N"] for t in tires), rec.wheelbase_m, pitch=True, roll=True,
+                    pitch_index=truth["body"]["pitch_dynamic_index"], roll_index=truth["body"]["roll_dynamic_index"])
+    rig_set = {"rig": ({t: truth["tires"][t]["k"] for t in tires}, {t: truth["tires"][t]["c"] for t in tires})}
+    road = road_profile("B", rec.speed_m_s * 60.0 + 1.0, ROAD_SPACING_M, 1)
+    runs = ride(body, sets, road=road, speed_m_s=rec.speed_m_s, duration_s=60.0)
+    rig = ride(rig_body, rig_set, road=road, speed_m_s=rec.speed_m_s, duration_s=60.0)["rig"]
+    assert runs["final"].comfort.a_w == pytest.approx(rig.comfort.a_w, rel=0.005)
+    assert runs["final"].comfort.vdv == pytest.approx(rig.comfort.vdv, rel=0.005)
+    # the static stiffness (300 kN/m, about 0.6x the rig's) filters the road more: a lower a_w
+    assert runs["static=300e3"].comfort.a_w < 0.9 * rig.comfort.a_w
+    assert set(runs) == {"paper", "final", "static=300e3"}

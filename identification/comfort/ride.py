@@ -1,0 +1,301 @@
+"""The whole tractor on a road profile: the seat's vertical acceleration for a tire parameter set.
+
+The model record is the whole-tractor one (:class:`~identification.model.tractor.TractorModel`: body,
+four tire laws, arrivals) with the cleat replaced by a road profile of two
+tracks: each tire rolls on its side's track at its own distance behind the
+front axle, so the rear tires meet the front tires' road a wheelbase later
+(the front/rear delay L / v), and the left and right tracks are as coherent as
+the profile makes them.  The same record runs in the compiled stepping and in
+the FMU master (:func:`~identification.tractor_cosim.run_tractor_fmus`), so a
+parameter set and its exported FMUs ride the same road.
+
+The seat is a point of the body, ``seat_x_m`` behind the front axle and
+``seat_y`` (a fraction of the half-track, + left) from the centre line: its
+vertical acceleration is the row of the body's generalized accelerations
+q̈ that places it, z̈ + (a − x) θ̈ + (y − ȳ) ẅ (see the model record for the
+coordinates; with a pivoting front axle the seat is on the body, not the
+axle).  As for the hubs, the track width need not be known.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..model.tractor import LEFT_TIRES, Body, Cleat, Inputs, TractorModel
+from ..recording import FRONT_TIRES
+
+__all__ = ["RideModel", "ride_model", "seat_row", "seat_acceleration", "ride", "RideRun", "parameter_sets",
+           "check_set_names", "RAMP_M"]
+
+#: Length over which the profile is faded in from zero under every tire, m (the tractor starts at rest on
+#: level ground).
+RAMP_M = 5.0
+
+
+@dataclass(frozen=True, eq=False)
+class RideModel(TractorModel):
+    """A model record whose road is a profile of two tracks (see the module docstring).
+
+    Parameters
+    ----------
+    road_x_m, road_left_m, road_right_m : ndarray
+        The profile: positions along the road (increasing, m) and the left and right track heights (m).
+    offsets_m : tuple of float
+        Each tire's distance behind the front axle, m (0 front, the wheelbase rear).
+    """
+
+    road_x_m: np.ndarray = None
+    road_left_m: np.ndarray = None
+    road_right_m: np.ndarray = None
+    offsets_m: tuple = ()
+
+    def inputs(self, start_s: float, step_s: float, n: int) -> Inputs:
+        """Road height and rate under every tire on the grid start + i h (no cleat edges)."""
+        base = super().inputs(start_s, step_s, n)   # flat road and the longitudinal positions
+        v = self.cleat.speed_m_s
+        t = start_s + step_s * np.arange(n)
+        x0 = float(self.road_x_m[0])
+        z = np.zeros((len(self.tires), n))
+        vz = np.zeros_like(z)
+        for j, tire in enumerate(self.tires):
+            track = self.road_left_m if tire in LEFT_TIRES else self.road_right_m
+            x = x0 + v * t - self.offsets_m[j]
+            height = np.interp(x, self.road_x_m, track, left=0.0, right=0.0)
+            slope = np.interp(x, self.road_x_m, np.gradient(track, self.road_x_m), left=0.0, right=0.0)
+            # faded in over RAMP_M from the tire's first metre on the profile
+            s = np.clip((x - x0) / RAMP_M, 0.0, 1.0)
+            fade = s * s * (3.0 - 2.0 * s)
+            dfade = np.where((s > 0) & (s < 1), 6.0 * s * (1.0 - s) / RAMP_M, 0.0)
+            z[j] = fade * height
+            vz[j] = v * (fade * slope + dfade * height)
+        return Inputs(z, vz, base.hub_x, base.hub_vx, edges=())
+
+
+def ride_model(body: Body, laws, *, speed_m_s: float, road_x_m, road_left_m, road_right_m) -> RideModel:
+    """The model record of `body` on its tires' `laws` driving the profile at `speed_m_s`.
+
+    Parameters
+    ----------
+    body : Body
+        The tractor (rigid or with a pivoting front axle), four tires.
+    laws : sequence of dict
+        Extended tire-law parameters per tire (point contact: no built-in cleat).
+    speed_m_s : float
+    road_x_m, road_left_m, road_right_m : array_like
+        The road profile (see :class:`RideModel`).
+    """
+    if body.kind not in ("rigid", "pivot"):
+        raise ValueError(f"a ride needs the whole tractor (rigid or pivoting front axle), got {body.kind!r}")
+    if not (speed_m_s > 0 and math.isfinite(speed_m_s)):
+        raise ValueError(f"speed_m_s must be finite and > 0, got {speed_m_s!r}")
+    x = np.asarray(road_x_m, dtype=float)
+    left, right = np.asarray(road_left_m, dtype=float), np.asarray(road_right_m, dtype=float)
+    if x.ndim != 1 or x.size < 2 or left.shape != x.shape or right.shape != x.shape or np.any(np.diff(x) <= 0):
+        raise ValueError("the road needs increasing positions and one height per position on each track")
+    if any(law["cleat_height"] > 0 for law in laws):
+        raise ValueError("a ride's tires have no built-in cleat: the road is the profile")
+    offsets = tuple(0.0 if t in FRONT_TIRES else float(body.wheelbase_m) for t in body.tires)
+    return RideModel(body=body, laws=tuple(laws), cleat=Cleat(0.0, 0.1, float(speed_m_s)),
+                     arrivals_s=tuple(0.0 for _ in body.tires), road_x_m=x, road_left_m=left,
+                     road_right_m=right, offsets_m=offsets)
+
+
+def seat_row(body: Body, *, seat_x_m: float, seat_y: float = 0.0) -> np.ndarray:
+    """The seat's vertical displacement per generalized coordinate of `body` (one row like J's).
+
+    Parameters
+    ----------
+    body : Body
+        Rigid or pivoting-front-axle tractor.
+    seat_x_m : float
+        Seat position behind the front axle, m.
+    seat_y : float
+        Seat position from the centre line as a fraction of the half-track (+ left).
+    """
+    if body.kind not in ("rigid", "pivot"):
+        raise ValueError(f"a seat needs the whole tractor, got a {body.kind!r} body")
+    W = np.array(body.loads_n, dtype=float)
+    front = np.array([t in FRONT_TIRES for t in body.tires])
+    a = body.wheelbase_m * W[~front].sum() / W.sum()
+    ybar = float(sum((1.0 if t in LEFT_TIRES else -1.0) * w for t, w in zip(body.tires, W)) / W.sum())
+    row = [1.0, a - seat_x_m, seat_y - ybar]
+    if body.pivot:
+        row.append(0.0)
+    return np.array(row)
+
+
+def seat_acceleration(model: TractorModel, trajectory, *, seat_x_m: float, seat_y: float = 0.0) -> np.ndarray:
+    """The seat's vertical acceleration on the trajectory's grid, m/s² (from the hubs' accelerations:
+    q̈ = J⁺ ü, exact as the hubs move with the body)."""
+    J, _, _ = model.body.matrices()
+    qdd = np.linalg.lstsq(J, np.asarray(trajectory.hub_accel_m_s2), rcond=None)[0]
+    return seat_row(model.body, seat_x_m=seat_x_m, seat_y=seat_y) @ qdd
+
+
+
+# ----------------------------------------------------------------------------- rides and parameter sets
+
+#: Default seat position behind the front axle, as a fraction of the wheelbase (a tractor's seat sits
+#: ahead of, and close to, the rear axle).
+SEAT_X_FRACTION = 0.85
+#: Road grid spacing, m.  The road is interpolated linearly between its points, which attenuates short
+#: wavelengths: on an ISO 8608 class C road at 7.2 km/h a 5 cm grid lowers the seat's a_w by 3 %, a 1 cm
+#: grid by 0.2 % (``tests/test_ride.py``, against the spectral prediction).
+ROAD_SPACING_M = 0.01
+
+
+@dataclass(frozen=True, eq=False)
+class RideRun:
+    """One parameter set's ride: the tires, the seat's acceleration and its ISO 2631-1 rating."""
+
+    name: str
+    k: dict                    # tire -> N/m
+    c: dict                    # tire -> N s/m
+    time_s: np.ndarray
+    seat_m_s2: np.ndarray
+    comfort: object            # ComfortResult (Wk)
+
+    def to_json(self) -> dict:
+        return {"k": self.k, "c": self.c, **self.comfort.to_json()}
+
+
+def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, seat_x_m: float | None = None,
+         seat_y: float = 0.0, step_s: float = 1e-3, exposure_h: float | None = None) -> dict:
+    """Drive the tractor over `road` once per tire parameter set; the seat's Wk rating of each.
+
+    Parameters
+    ----------
+    body : Body
+        Rigid or pivoting-front-axle tractor.
+    sets : dict
+        ``name -> (k, c)``, each a dict tire -> value (N/m, N s/m).
+    road : RoadProfile
+        The two tracks (:func:`identification.comfort.road.road_profile`); the front axle starts at its
+        first point, the rear one a wheelbase before it (on level ground, faded in over RAMP_M).
+    speed_m_s, duration_s : float
+    seat_x_m : float, optional
+        Seat position behind the front axle, m (default SEAT_X_FRACTION of the wheelbase).
+    seat_y : float
+        Seat position from the centre line, fraction of the half-track (+ left).
+    step_s : float
+        Step of the simulation, s (also the rating's sampling interval).
+    exposure_h : float, optional
+        Daily exposure for A(8) and the daily VDV (:func:`identification.comfort.iso2631.comfort`).
+
+    Returns
+    -------
+    dict of str to RideRun
+        The rating covers the ride after both axles are past the fade-in.
+    """
+    from .iso2631 import comfort
+
+    seat_x = SEAT_X_FRACTION * body.wheelbase_m if seat_x_m is None else float(seat_x_m)
+    settle_s = (RAMP_M + body.wheelbase_m) / speed_m_s
+    if not duration_s > 2 * settle_s:
+        raise ValueError(f"duration_s must exceed twice the fade-in of both axles ({2 * settle_s:.3g} s at "
+                         f"{speed_m_s:g} m/s), got {duration_s!r}")
+    if road.x_m[-1] < speed_m_s * duration_s:
+        raise ValueError(f"the road ({road.x_m[-1]:g} m) is shorter than the ride ({speed_m_s * duration_s:g} m)")
+    out = {}
+    for name, (k, c) in sets.items():
+        laws = [_point_contact(k[t], c[t], load) for t, load in zip(body.tires, body.loads_n)]
+        model = ride_model(body, laws, speed_m_s=speed_m_s, road_x_m=road.x_m, road_left_m=road.left_m,
+                           road_right_m=road.right_m)
+        from ..model.kernels import run_model
+        traj = run_model(model, *model.grid(0.0, duration_s, step_s))
+        keep = traj.time_s >= settle_s
+        seat = seat_acceleration(model, traj, seat_x_m=seat_x, seat_y=seat_y)[keep]
+        out[name] = RideRun(name, {t: float(k[t]) for t in body.tires}, {t: float(c[t]) for t in body.tires},
+                            traj.time_s[keep], seat, comfort(seat, 1.0 / step_s, "Wk", exposure_h=exposure_h))
+    return out
+
+
+def _point_contact(k: float, c: float, load: float) -> dict:
+    from .. import tire_law
+
+    return dict(tire_law.EXTENDED_DEFAULTS, stiffness=float(k), damping=float(c), static_load=float(load))
+
+
+def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
+    """The tractor's body and tire parameter sets to ride with, from a whole-tractor recording.
+
+    Parameters
+    ----------
+    rec : Recording
+        All four channels.
+    names : iterable of str
+        ``final`` (the joint diagnosis's named model), ``paper`` (the paper's method per tire),
+        ``waveform`` (the waveform fit per tire), ``static=K`` (every tire at K N/m, e.g. a compression
+        test's, with the final model's c).
+    diagnosis : TractorDiagnosis, optional
+        The recording's joint diagnosis (run when not given).
+    workers : int
+        Processes of the diagnosis.
+
+    Returns
+    -------
+    (Body, dict, str)
+        The diagnosed body (the rigid tractor with typical indices when the diagnosis named no body
+        coupling), ``name -> (k, c)``, and how the body was obtained.
+    """
+    from ..diagnose.joint_select import diagnose_tractor
+    from ..diagnose.joint_timing import BODY_DEFAULTS
+    from ..recording import TIRES
+
+    names = check_set_names(names)
+    missing = [t for t in TIRES if t not in rec.accel_m_s2]
+    if missing:
+        raise InputError(rec.source, f"a ride needs all four hubs; no channel {', '.join(missing)}")
+    diag = diagnosis or diagnose_tractor(rec, workers=workers)
+    theta = diag.final.params
+    body = diag.final.model.body(theta)
+    how = f"diagnosed ({body.kind})"
+    if body.kind not in ("rigid", "pivot"):
+        body = Body(TIRES, tuple(rec.wheel_load_N[t] for t in TIRES), rec.wheelbase_m, pitch=True, roll=True,
+                    pitch_index=BODY_DEFAULTS["pitch_index"], roll_index=BODY_DEFAULTS["roll_index"])
+        how = "assumed rigid with typical indices (the diagnosis named no body coupling)"
+    final = ({t: theta[f"k_{t}"] for t in TIRES}, {t: theta[f"c_{t}"] for t in TIRES})
+    sets = {}
+    for name in names:
+        if name == "final":
+            sets[name] = final
+        elif name in ("paper", "waveform"):
+            if name == "paper":
+                from ..identify import identify as method
+            else:
+                from ..waveform import identify_waveform_recording as method
+            results = method(rec, list(TIRES))
+            sets[name] = ({t: results[t].k for t in TIRES}, {t: results[t].c for t in TIRES})
+        else:
+            k = _stiffness(name)
+            sets[name] = ({t: k for t in TIRES}, final[1])
+    return body, sets, how
+
+
+def check_set_names(names) -> list:
+    """The parameter-set names of :func:`parameter_sets`, checked (InputError naming ``--compare``)."""
+    names = [str(n).strip() for n in names if str(n).strip()]
+    if not names:
+        raise InputError("--compare", "no parameter set given")
+    if len(set(names)) != len(names):
+        raise InputError("--compare", f"a parameter set named twice in {','.join(names)!r}")
+    for name in names:
+        if name.startswith("static="):
+            _stiffness(name)
+        elif name not in ("paper", "waveform", "final"):
+            raise InputError("--compare", f"unknown parameter set {name!r} (paper, waveform, final, static=K)")
+    return names
+
+
+def _stiffness(name: str) -> float:
+    try:
+        k = float(name.split("=", 1)[1])
+    except ValueError:
+        raise InputError("--compare", f"{name!r}: static=K needs a stiffness K in N/m, e.g. static=300e3") from None
+    if not (math.isfinite(k) and 1e4 <= k <= 1e8):
+        raise InputError("--compare", f"{name!r}: a tire stiffness of 1e4 .. 1e8 N/m is expected")
+    return k

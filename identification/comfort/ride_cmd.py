@@ -1,0 +1,129 @@
+"""``cleatfmu ride``: the whole tractor on an ISO 8608 road with each tire parameter set, rated at the seat.
+
+The body (rigid or pivoting front axle, dynamic indices) and the sets come
+from a whole-tractor recording (:func:`identification.comfort.ride.parameter_sets`);
+the ride from :func:`identification.comfort.ride.ride`; the rating is
+ISO 2631-1's Wk (vertical) at the seat.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+from ..errors import InputError
+
+__all__ = ["add_parser", "run", "DEFAULT_COMPARE"]
+
+DEFAULT_COMPARE = "paper,final"
+_CLASSES = ("A", "B", "C", "D", "E")
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cleatfmu ride``."""
+    p = subparsers.add_parser(
+        "ride", help="the tractor on an ISO 8608 road with each tire parameter set: ISO 2631-1 a_w, VDV at the seat",
+        description="Diagnose a whole-tractor recording (body and tires), then drive that tractor over a random "
+                    "ISO 8608 road (two tracks, seeded) once per tire parameter set (--compare) and rate the seat's "
+                    "vertical acceleration by ISO 2631-1 (Wk): weighted RMS a_w, VDV, MTVV, crest factor, and the "
+                    "daily exposure A(8) against EU directive 2002/44/EC.")
+    p.add_argument("recording", metavar="REC.csv", nargs="?", help="a whole-tractor recording (four hubs)")
+    p.add_argument("--example", metavar="NAME", help="an embedded recording instead of REC.csv (7kmh, 10kmh)")
+    p.add_argument("--road", default="B", type=str.upper, help="ISO 8608 road class, A (best) .. E (default B)")
+    p.add_argument("--speed-kmh", type=float, default=None, help="driving speed, km/h (default: the recording's)")
+    p.add_argument("--duration-s", type=float, default=60.0, help="length of the ride, s (default 60)")
+    p.add_argument("--compare", default=DEFAULT_COMPARE,
+                   help="parameter sets, comma-separated: paper, waveform, final, static=K (K in N/m; "
+                        f"default {DEFAULT_COMPARE})")
+    p.add_argument("--seed", type=int, default=1, help="seed of the road profile (default 1)")
+    p.add_argument("--seat-x-m", type=float, default=None,
+                   help="seat position behind the front axle, m (default: 0.85 of the wheelbase)")
+    p.add_argument("--seat-y", type=float, default=0.0,
+                   help="seat position from the centre line, fraction of the half-track (+ left; default 0)")
+    p.add_argument("--exposure-h", type=float, default=8.0, help="daily exposure time for A(8), h (default 8)")
+    p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="processes of the diagnosis (default: 2 or the CPU count)")
+    p.add_argument("--json", action="store_true", help="print JSON (SI units)")
+    p.add_argument("--plot", metavar="OUT.png", help="write the seat's acceleration and a_w, VDV per set")
+    p.set_defaults(func=run)
+
+
+def _check(args) -> list:
+    if args.road not in _CLASSES:
+        raise InputError("--road", f"unknown ISO 8608 class {args.road!r} (A, B, C, D or E)")
+    if args.speed_kmh is not None and not (math.isfinite(args.speed_kmh) and 1.0 <= args.speed_kmh <= 60.0):
+        raise InputError("--speed-kmh", f"a tractor's ride speed of 1 .. 60 km/h is expected, got {args.speed_kmh:g}")
+    if not (math.isfinite(args.duration_s) and 10.0 <= args.duration_s <= 3600.0):
+        raise InputError("--duration-s", f"10 .. 3600 s expected, got {args.duration_s:g}")
+    if not (math.isfinite(args.exposure_h) and 0 < args.exposure_h <= 24.0):
+        raise InputError("--exposure-h", f"0 .. 24 h expected, got {args.exposure_h:g}")
+    if not (math.isfinite(args.seat_y) and -1.5 <= args.seat_y <= 1.5):
+        raise InputError("--seat-y", f"a fraction of the half-track within ±1.5 is expected, got {args.seat_y:g}")
+    if args.seat_x_m is not None and not math.isfinite(args.seat_x_m):
+        raise InputError("--seat-x-m", f"a finite position is expected, got {args.seat_x_m:g}")
+    if args.workers < 1:
+        raise InputError("--workers", f"at least 1, got {args.workers}")
+    from .ride import check_set_names
+
+    return check_set_names(args.compare.split(","))
+
+
+def run(args) -> int:
+    from ..cli import _recording_arg
+    from ..cliutil import check_output
+
+    names = _check(args)
+    check_output(args.plot, ".png", "plot")
+    rec = _recording_arg(args)
+    from .ride import ROAD_SPACING_M, parameter_sets, ride
+    from .road import road_profile
+
+    speed = rec.speed_m_s if args.speed_kmh is None else args.speed_kmh / 3.6
+    if args.seat_x_m is not None and not -1.0 <= args.seat_x_m <= rec.wheelbase_m + 1.0:
+        raise InputError("--seat-x-m", f"the seat must be on the tractor (-1 .. wheelbase + 1 m), got {args.seat_x_m:g}")
+    body, sets, how = parameter_sets(rec, names, workers=args.workers)
+    road = road_profile(args.road, speed * args.duration_s + 1.0, ROAD_SPACING_M, args.seed)
+    runs = ride(body, sets, road=road, speed_m_s=speed, duration_s=args.duration_s, seat_x_m=args.seat_x_m,
+                seat_y=args.seat_y, exposure_h=args.exposure_h)
+    seat_x = 0.85 * body.wheelbase_m if args.seat_x_m is None else args.seat_x_m
+    doc = {"recording": rec.source, "road": {"class": args.road, "seed": args.seed, "length_m": float(road.x_m[-1]),
+                                             "track_width_m": road.track_width_m,
+                                             "coherence_decay": road.coherence_decay},
+           "speed_m_s": speed, "duration_s": args.duration_s, "seat": {"x_m": seat_x, "y": args.seat_y},
+           "body": {"kind": body.kind, "pitch_index": body.pitch_index, "roll_index": body.roll_index,
+                    **({"pivot_index": body.pivot_index} if body.pivot else {}), "source": how},
+           "sets": {name: r.to_json() for name, r in runs.items()}}
+    if args.plot:
+        from ..plots import save_png
+        save_png(_figure(runs, doc), args.plot)
+    if args.json:
+        print(json.dumps(doc, indent=2))
+    else:
+        print(f"{rec.source}: ISO 8608 class {args.road} road (seed {args.seed}), {speed * 3.6:.3g} km/h, "
+              f"{args.duration_s:g} s; body {how}; seat {seat_x:.2f} m behind the front axle")
+        print(f"{'set':<16}{'k FL/FR/RL/RR kN/m':>24}{'a_w m/s2':>10}{'VDV':>8}{'MTVV':>8}{'A(8)':>8}")
+        for name, r in runs.items():
+            ks = "/".join(f"{r.k[t] / 1e3:.0f}" for t in r.k)
+            a8 = r.comfort.exposure.a8 if r.comfort.exposure else float("nan")
+            print(f"{name:<16}{ks:>24}{r.comfort.a_w:>10.3f}{r.comfort.vdv:>8.3f}{r.comfort.mtvv:>8.3f}{a8:>8.3f}")
+        if args.plot:
+            print(f"wrote {args.plot}")
+    return 0
+
+
+def _figure(runs, doc):
+    from ..plots import figure
+
+    fig, (ax, bx) = figure(1, 2, size=(11.0, 3.8), gridspec_kw={"width_ratios": [3, 1]})
+    for i, (name, r) in enumerate(runs.items()):
+        window = r.time_s < r.time_s[0] + 10.0
+        ax.plot(r.time_s[window], r.seat_m_s2[window], lw=0.8, color=f"C{i}", label=name)
+        bx.bar(i, r.comfort.a_w, color=f"C{i}")
+    ax.set_xlabel("time / s")
+    ax.set_ylabel("seat vertical acceleration / m/s²")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.set_title(f"ISO 8608 class {doc['road']['class']}, {doc['speed_m_s'] * 3.6:.3g} km/h (the rated ride's first 10 s)")
+    bx.set_xticks(range(len(runs)), list(runs), rotation=30, ha="right", fontsize=8)
+    bx.set_ylabel("a_w (Wk) / m/s²")
+    fig.tight_layout()
+    return fig
