@@ -55,6 +55,7 @@ class DiagnosisReport:
 
     recording: str
     diagnosis: dict | None = None                    # diagnose --json, NRMSEs from the FMU co-simulation
+    ride: dict | None = None                         # ride --json: the tractor on a road, per parameter set
     figures: dict = field(default_factory=dict)
     fmus: list = field(default_factory=list)
     errors: list = field(default_factory=list)
@@ -222,7 +223,26 @@ def diagnose_recording(csv_path: str, stem: str, out_dir: str) -> DiagnosisRepor
     with _timed(rep.timings, "validate"):
         for entry in rep.fmus:
             entry["problems"] = _validate(Path(out_dir) / entry["file"])
+    if len(diag.channels) == 4:
+        with _timed(rep.timings, "ride"):
+            _ride(rep, rec, diag)
     return rep
+
+
+def _ride(rep: DiagnosisReport, rec, diag) -> None:
+    """The diagnosed tractor on the report's road with the paper's, the final and a static parameter set."""
+    from .comfort.ride import REPORT_RIDE, ride_comparison
+    from .plots import plot_ride, png_bytes
+
+    try:
+        runs, rep.ride = ride_comparison(rec, REPORT_RIDE["names"], road_class=REPORT_RIDE["road_class"],
+                                         seed=REPORT_RIDE["seed"], duration_s=REPORT_RIDE["duration_s"],
+                                         diagnosis=diag)
+    except (InputError, ValueError) as exc:
+        rep.errors.append(f"ride: {getattr(exc, 'problem', exc)}")
+        return
+    rep.figures["ride"] = png_bytes(plot_ride(runs, road_class=REPORT_RIDE["road_class"],
+                                              speed_m_s=rep.ride["speed_m_s"]))
 
 
 def _job(args):

@@ -181,3 +181,20 @@ def finish_channel_figure(fig, axes, title: str):
     axes[0, 0].set_title(title, fontsize=9)
     axes[-1, 0].set_xlabel("time / s")
     return fig
+
+
+def plot_ride(runs, *, road_class: str, speed_m_s: float):
+    """The seat's vertical acceleration (the rated ride's first 10 s) and a_w (Wk) per parameter set."""
+    fig, (ax, bx) = figure(1, 2, size=(11.0, 3.8), gridspec_kw={"width_ratios": [3, 1]})
+    for i, (name, r) in enumerate(runs.items()):
+        window = r.time_s < r.time_s[0] + 10.0
+        ax.plot(r.time_s[window], r.seat_m_s2[window], lw=0.8, color=f"C{i}", label=name)
+        bx.bar(i, r.comfort.a_w, color=f"C{i}")
+    ax.set_xlabel("time / s")
+    ax.set_ylabel("seat vertical acceleration / m/s²")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.set_title(f"ISO 8608 class {road_class} road, {speed_m_s * 3.6:.3g} km/h (the rated ride's first 10 s)")
+    bx.set_xticks(range(len(runs)), list(runs), rotation=30, ha="right", fontsize=8)
+    bx.set_ylabel("a_w (Wk) / m/s²")
+    fig.tight_layout()
+    return fig

@@ -55,7 +55,7 @@ def test_demo_report_sections_tables_images(demo, cli):
             assert float(row[3]) == pytest.approx(entry["T"], abs=6e-4)
     # every embedded image is a PNG that decodes to a real picture
     images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', html)
-    assert len(images) == 8 * 2 + 2     # per tire: decay, co-simulation; per recording: the joint diagnosis
+    assert len(images) == 8 * 2 + 2 * 2   # per tire: decay, co-simulation; per recording: diagnosis, ride
     for data in images:
         pixels = _png(base64.b64decode(data))
         assert pixels.ndim == 3 and pixels.shape[0] > 200 and pixels.shape[1] > 400
@@ -106,6 +106,12 @@ def test_demo_recommends_one_joint_k_c_per_tire_within_the_truth(demo):
             assert (d["tires"][tire]["unexplained"] is None) == (after <= 1.5 * noise) or \
                 abs(after / noise - 1.5) < 0.01, (name, tire, after, noise)
             assert f"<b>{rec['k'] / 1e3:.2f}</b>" in table
+        # the ride: the final set is the recommended one, rated at the seat beside the paper's and a static one
+        ride = r["ride"]
+        assert set(ride["sets"]) == {"paper", "final", "static=300e3"}
+        assert ride["sets"]["final"]["k"] == {t: r["tires"][t]["recommended"]["k"] for t in r["tires"]}
+        assert all(s["a_w"] > 0 and s["vdv"] > 0 for s in ride["sets"].values())
+        assert f'{ride["sets"]["final"]["a_w"]:.3f}' in html
 
 
 def _chromium():

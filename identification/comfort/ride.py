@@ -29,7 +29,7 @@ from ..model.tractor import LEFT_TIRES, Body, Cleat, Inputs, TractorModel
 from ..recording import FRONT_TIRES
 
 __all__ = ["RideModel", "ride_model", "seat_row", "seat_acceleration", "ride", "RideRun", "parameter_sets",
-           "check_set_names", "RAMP_M"]
+           "check_set_names", "ride_comparison", "REPORT_RIDE", "RAMP_M"]
 
 #: Length over which the profile is faded in from zero under every tire, m (the tractor starts at rest on
 #: level ground).
@@ -253,11 +253,11 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
     diag = diagnosis or diagnose_tractor(rec, workers=workers)
     theta = diag.final.params
     body = diag.final.model.body(theta)
-    how = f"diagnosed ({body.kind})"
+    how = "diagnosed " + ("rigid tractor" if body.kind == "rigid" else "tractor with a pivoting front axle")
     if body.kind not in ("rigid", "pivot"):
         body = Body(TIRES, tuple(rec.wheel_load_N[t] for t in TIRES), rec.wheelbase_m, pitch=True, roll=True,
                     pitch_index=BODY_DEFAULTS["pitch_index"], roll_index=BODY_DEFAULTS["roll_index"])
-        how = "assumed rigid with typical indices (the diagnosis named no body coupling)"
+        how = "rigid tractor with typical indices (assumed: the diagnosis named no body coupling)"
     final = ({t: theta[f"k_{t}"] for t in TIRES}, {t: theta[f"c_{t}"] for t in TIRES})
     sets = {}
     for name in names:
@@ -299,3 +299,35 @@ def _stiffness(name: str) -> float:
     if not (math.isfinite(k) and 1e4 <= k <= 1e8):
         raise InputError("--compare", f"{name!r}: a tire stiffness of 1e4 .. 1e8 N/m is expected")
     return k
+
+
+#: The report's ride: road class, seed, duration (s), parameter sets (a static stiffness within the
+#: paper's Table 5 range, 276-322 kN/m).
+REPORT_RIDE = {"road_class": "B", "seed": 1, "duration_s": 60.0, "names": ("paper", "final", "static=300e3")}
+
+
+def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m_s: float | None = None,
+                    duration_s: float = 60.0, seat_x_m: float | None = None, seat_y: float = 0.0,
+                    exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1) -> tuple:
+    """The recording's tractor on an ISO 8608 road with each parameter set: (runs, JSON document).
+
+    Combines :func:`parameter_sets`, :func:`identification.comfort.road.road_profile` (grid ROAD_SPACING_M)
+    and :func:`ride`; `speed_m_s` defaults to the recording's.  The document holds the road, the speed,
+    the seat, the body and per set its k, c and rating (SI units), as ``cleatfmu ride --json`` prints it.
+    """
+    from .road import road_profile
+
+    speed = rec.speed_m_s if speed_m_s is None else float(speed_m_s)
+    body, sets, how = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers)
+    road = road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M, seed)
+    runs = ride(body, sets, road=road, speed_m_s=speed, duration_s=duration_s, seat_x_m=seat_x_m,
+                seat_y=seat_y, exposure_h=exposure_h)
+    seat_x = SEAT_X_FRACTION * body.wheelbase_m if seat_x_m is None else float(seat_x_m)
+    doc = {"recording": rec.source,
+           "road": {"class": road.road_class, "seed": int(seed), "length_m": float(road.x_m[-1]),
+                    "track_width_m": road.track_width_m, "coherence_decay": road.coherence_decay},
+           "speed_m_s": speed, "duration_s": float(duration_s), "seat": {"x_m": seat_x, "y": float(seat_y)},
+           "body": {"kind": body.kind, "pitch_index": body.pitch_index, "roll_index": body.roll_index,
+                    **({"pivot_index": body.pivot_index} if body.pivot else {}), "source": how},
+           "sets": {name: r.to_json() for name, r in runs.items()}}
+    return runs, doc

@@ -75,32 +75,23 @@ def run(args) -> int:
     names = _check(args)
     check_output(args.plot, ".png", "plot")
     rec = _recording_arg(args)
-    from .ride import ROAD_SPACING_M, parameter_sets, ride
-    from .road import road_profile
+    from .ride import ride_comparison
 
-    speed = rec.speed_m_s if args.speed_kmh is None else args.speed_kmh / 3.6
     if args.seat_x_m is not None and not -1.0 <= args.seat_x_m <= rec.wheelbase_m + 1.0:
         raise InputError("--seat-x-m", f"the seat must be on the tractor (-1 .. wheelbase + 1 m), got {args.seat_x_m:g}")
-    body, sets, how = parameter_sets(rec, names, workers=args.workers)
-    road = road_profile(args.road, speed * args.duration_s + 1.0, ROAD_SPACING_M, args.seed)
-    runs = ride(body, sets, road=road, speed_m_s=speed, duration_s=args.duration_s, seat_x_m=args.seat_x_m,
-                seat_y=args.seat_y, exposure_h=args.exposure_h)
-    seat_x = 0.85 * body.wheelbase_m if args.seat_x_m is None else args.seat_x_m
-    doc = {"recording": rec.source, "road": {"class": args.road, "seed": args.seed, "length_m": float(road.x_m[-1]),
-                                             "track_width_m": road.track_width_m,
-                                             "coherence_decay": road.coherence_decay},
-           "speed_m_s": speed, "duration_s": args.duration_s, "seat": {"x_m": seat_x, "y": args.seat_y},
-           "body": {"kind": body.kind, "pitch_index": body.pitch_index, "roll_index": body.roll_index,
-                    **({"pivot_index": body.pivot_index} if body.pivot else {}), "source": how},
-           "sets": {name: r.to_json() for name, r in runs.items()}}
+    runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
+                                speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
+                                duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
+                                exposure_h=args.exposure_h, workers=args.workers)
+    speed, seat_x, how = doc["speed_m_s"], doc["seat"]["x_m"], doc["body"]["source"]
     if args.plot:
-        from ..plots import save_png
-        save_png(_figure(runs, doc), args.plot)
+        from ..plots import plot_ride, save_png
+        save_png(plot_ride(runs, road_class=args.road, speed_m_s=speed), args.plot)
     if args.json:
         print(json.dumps(doc, indent=2))
     else:
         print(f"{rec.source}: ISO 8608 class {args.road} road (seed {args.seed}), {speed * 3.6:.3g} km/h, "
-              f"{args.duration_s:g} s; body {how}; seat {seat_x:.2f} m behind the front axle")
+              f"{args.duration_s:g} s; {how}; seat {seat_x:.2f} m behind the front axle")
         print(f"{'set':<16}{'k FL/FR/RL/RR kN/m':>24}{'a_w m/s2':>10}{'VDV':>8}{'MTVV':>8}{'A(8)':>8}")
         for name, r in runs.items():
             ks = "/".join(f"{r.k[t] / 1e3:.0f}" for t in r.k)
@@ -110,20 +101,3 @@ def run(args) -> int:
             print(f"wrote {args.plot}")
     return 0
 
-
-def _figure(runs, doc):
-    from ..plots import figure
-
-    fig, (ax, bx) = figure(1, 2, size=(11.0, 3.8), gridspec_kw={"width_ratios": [3, 1]})
-    for i, (name, r) in enumerate(runs.items()):
-        window = r.time_s < r.time_s[0] + 10.0
-        ax.plot(r.time_s[window], r.seat_m_s2[window], lw=0.8, color=f"C{i}", label=name)
-        bx.bar(i, r.comfort.a_w, color=f"C{i}")
-    ax.set_xlabel("time / s")
-    ax.set_ylabel("seat vertical acceleration / m/s²")
-    ax.legend(loc="upper right", fontsize=8)
-    ax.set_title(f"ISO 8608 class {doc['road']['class']}, {doc['speed_m_s'] * 3.6:.3g} km/h (the rated ride's first 10 s)")
-    bx.set_xticks(range(len(runs)), list(runs), rotation=30, ha="right", fontsize=8)
-    bx.set_ylabel("a_w (Wk) / m/s²")
-    fig.tight_layout()
-    return fig
