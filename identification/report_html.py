@@ -1,13 +1,15 @@
-"""The batch report: one self-contained HTML file (figures embedded as PNG data URIs).
+"""The batch report: one self-contained HTML file (figures embedded as PNG data URIs) and its tables as CSV.
 
-Sections (each an ``<section id=...>``): ``summary``, ``table4`` (the paper's
-Table 4 for every speed and tire), ``waveform`` (waveform fits with 95 %
-intervals), ``recommended`` (one k, c per tire from the joint whole-tractor
-diagnosis, beside the paper's and the waveform values, with what is left
-unexplained), ``diagnosis-<recording>`` (effects with evidence, body, gains,
-overlays per channel), ``tire-<recording>-<tire>`` (Figure 9a/9b, the
-co-simulated point-contact FMU against the measurement), ``fmus`` (every FMU
-written, with its validation) and ``timings``.
+The first screen is the verdict (``recommended``): per tire the recommended k
+and c (the final model's, those in the extended FMU) with intervals, the
+effects named, the fit against the noise floor and a plain flag when
+something is unexplained; then a table of contents, a "how to read this" box,
+k and c against speed, and the sections ``summary``, ``table4`` (the paper's
+Table 4), ``waveform`` (the methods side by side), ``diagnoses`` (per
+recording ``diagnosis-<recording>``: effects with evidence, body, overlays,
+the ride comfort), ``tires`` (``tire-<recording>-<tire>``: Figure 9a/9b, the
+co-simulated point-contact FMU), ``fmus`` and ``timings``.  Every table is
+also written as ``tables/<name>.csv`` beside ``summary.json``.
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ from pathlib import Path
 from . import __version__
 from ._files import atomic_write_texts
 from .batch import BatchResult
+from .report_tables import (METHODS_HEADS, TABLE4_HEADS, csv_text, read_truth, ride_table, table4_table,
+                            verdict_heads, verdict_table, waveform_table)
 
 __all__ = ["render_report", "write_report"]
 
@@ -34,6 +38,14 @@ td.l,th.l{text-align:left}.ok{color:#1c7c3a;font-weight:600}.bad{color:#b3261e;f
 .note{color:#556;font-size:.9em}img{max-width:100%;border:1px solid #dde3ea;margin:.4em 0}
 .effect{background:#fff6e0;border-left:4px solid #e0a800;padding:.4em .8em;margin:.4em 0}
 code{background:#eef2f6;padding:0 .25em;border-radius:3px}
+.scroll{overflow-x:auto;max-width:100%}td.truth{color:#5a6b7d;font-style:italic}td.final{font-weight:600}
+nav.toc{background:#f4f7fa;border:1px solid #dde3ea;padding:.5em 1em;margin:1em 0}nav.toc a{margin-right:1em}
+.howto{background:#f4f7fa;border-left:4px solid #3a6ea5;padding:.5em 1em;margin:1em 0;font-size:.92em}
+.howto dt{font-weight:600}.howto dd{margin:0 0 .3em 1em}
+@media (max-width:900px){body{padding:0 .4em}table{font-size:.8em}th,td{padding:.2em .3em}}
+@media print{body{max-width:none;margin:0;font-size:10pt}nav.toc,.downloads{display:none}
+img{max-width:100%;page-break-inside:avoid}h2{page-break-after:avoid}tr{page-break-inside:avoid}
+a{color:inherit;text-decoration:none}}
 """
 
 
@@ -45,15 +57,11 @@ def _img(png: bytes, alt: str) -> str:
     return f'<img alt="{_e(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode("ascii")}">'
 
 
-def _f(x, fmt=".3g", scale=1.0) -> str:
-    return "–" if x is None else format(x * scale, fmt)
-
-
 def _summary(result: BatchResult) -> str:
     rows = []
     for r in result.recordings:
         if not r.ok:
-            rows.append(f'<tr><td class="l">{_e(r.source)}</td><td class="l bad">failed</td>'
+            rows.append(f'<tr><td class="l">{_e(Path(r.source).name)}</td><td class="l bad">failed</td>'
                         f'<td class="l">{_e(r.error)}</td></tr>')
             continue
         errors = [f"{t.tire}: {e}" for t in r.tires for e in t.errors] + \
@@ -66,7 +74,7 @@ def _summary(result: BatchResult) -> str:
              if any(v["unexplained"] for v in d["tires"].values()) else "residual at the noise floor"))
         detail = _e("; ".join(errors)) if errors else \
             f"{r.speed_kmh:.4g} km/h, {r.sample_rate_hz:.6g} Hz, {_e(found)}"
-        rows.append(f'<tr><td class="l">{_e(r.source)}</td><td class="l">{status}</td>'
+        rows.append(f'<tr><td class="l">{_e(Path(r.source).name)}</td><td class="l">{status}</td>'
                     f'<td class="l">{detail}</td></tr>')
     n_bad = len(result.failures)
     verdict = ('<p class="ok">All recordings processed.</p>' if not n_bad else
@@ -81,70 +89,62 @@ def _tires(result: BatchResult):
             yield r, t
 
 
-def _table4(result: BatchResult) -> str:
-    rows = []
-    for r, t in sorted(_tires(result), key=lambda rt: (rt[0].speed_kmh or 0, rt[1].tire)):
-        p = t.paper
-        if p is None:
-            rows.append(f'<tr><td>{r.speed_kmh:.4g}</td><td class="l">{_e(r.stem)}</td><td class="l">{t.tire}</td>'
-                        f'<td class="l bad" colspan="8">not identified</td></tr>')
-            continue
-        rows.append(f'<tr><td>{r.speed_kmh:.4g}</td><td class="l">{_e(r.stem)}</td><td class="l">{t.tire}</td>'
-                    f'<td>{p["T"]:.3f}</td><td>{p["zeta"]:.3f}</td><td>{p["delta"]:.3f}</td>'
-                    f'<td>{p["omega_n"]:.2f}</td><td>{p["k"] / 1e3:.2f}</td><td>{p["c"] / 1e3:.2f}</td>'
-                    f'<td>{p["r2"]:.2f}</td><td>{p["n_peaks"]}</td></tr>')
-    return ('<section id="table4"><h2>Stiffness and damping by the paper\'s method (Table 4)</h2>'
-            '<p class="note">T and δ from the first two peaks, ζ and ω<sub>n</sub> by eqs. 7-8, K = m ω<sub>n</sub>²,'
-            ' C by the exponential fit through the first peak (eqs. 16-17), R² of the semi-log regression.</p>'
-            '<table><tr><th>speed / km·h⁻¹</th><th class="l">recording</th><th class="l">tire</th><th>T / s</th>'
-            '<th>ζ</th><th>δ</th><th>ω<sub>n</sub> / rad·s⁻¹</th><th>K / kN·m⁻¹</th><th>C / kN·s·m⁻¹</th>'
-            f'<th>R²</th><th>peaks</th></tr>{"".join(rows)}</table></section>')
+def _verdict(result: BatchResult, tables: dict) -> str:
+    table = tables["verdict"]
+    conditional = any(row[12] == "unexplained" for row in table.rows)
+    truth = "k_truth_N_m" in table.columns
+    return ('<section id="recommended"><h2>Verdict: recommended stiffness and damping</h2>'
+            '<p>One joint fit per recording: every channel at once under one body (heave, pitch, roll), with the '
+            'effects the diagnosis named; these k and c are the ones in the exported extended FMUs. '
+            + ('<span class="bad">Some tire keeps a residual above its noise floor: its intervals hold only if '
+               'the model is right.</span>' if conditional else
+               '<span class="ok">Every tire is fitted to within its noise floor.</span>')
+            + (' Rig truth (in italics) from the recording\'s truth file, shown for comparison only.' if truth else '')
+            + '</p><ul class="note">' + "".join(
+                f'<li>{_e(r.stem)} ({r.speed_kmh:.3g} km/h): effects named: '
+                f'<b>{_e(", ".join(r.diagnosis.diagnosis["effects"]) or "none")}</b></li>'
+                for r in result.recordings if r.diagnosis is not None and r.diagnosis.diagnosis is not None)
+            + f'</ul>{table.html(head=verdict_heads(table))}'
+            '<p class="downloads note">Download: <a href="summary.json">summary.json</a> · '
+            + " · ".join(f'<a href="tables/{name}.csv">{name}.csv</a>' for name in tables) + '</p></section>')
 
 
-def _waveform(result: BatchResult) -> str:
-    rows = []
-    for r, t in _tires(result):
-        w = t.waveform
-        if w is None:
-            continue
-        rows.append(f'<tr><td class="l">{_e(r.stem)}</td><td class="l">{t.tire}</td>'
-                    f'<td>{w["k"] / 1e3:.2f}</td><td>{w["k_ci"][0] / 1e3:.2f} – {w["k_ci"][1] / 1e3:.2f}</td>'
-                    f'<td>{w["c"] / 1e3:.3f}</td><td>{w["c_ci"][0] / 1e3:.3f} – {w["c_ci"][1] / 1e3:.3f}</td>'
-                    f'<td>{w["zeta"]:.3f}</td><td>{w["r2"]:.4f}</td></tr>')
-    return ('<section id="waveform"><h2>Waveform fits of the free decay (95 % confidence intervals)</h2>'
-            '<table><tr><th class="l">recording</th><th class="l">tire</th><th>K / kN·m⁻¹</th><th>K interval</th>'
-            '<th>C / kN·s·m⁻¹</th><th>C interval</th><th>ζ</th><th>R²</th></tr>'
-            f'{"".join(rows)}</table></section>')
+def _toc(result: BatchResult) -> str:
+    parts = [('recommended', 'verdict'), ('howto', 'how to read this'), ('speed', 'k, c vs speed'),
+             ('summary', 'recordings'), ('table4', "paper's Table 4"), ('waveform', 'methods side by side'),
+             ('diagnoses', 'diagnoses and ride comfort'), ('tires', 'tires'), ('fmus', 'FMUs'), ('timings', 'run')]
+    links = " ".join(f'<a href="#{a}">{_e(b)}</a>' for a, b in parts)
+    tires = " ".join(f'<a href="#tire-{_e(r.stem)}-{t.tire}">{_e(r.stem)} {t.tire}</a>' for r, t in _tires(result))
+    return f'<nav class="toc"><b>Contents</b>: {links}<br><span class="note">Tires: {tires}</span></nav>'
 
 
-def _recommended(result: BatchResult) -> str:
-    rows = []
-    for r, t in _tires(result):
-        rec = r.recommended(t.tire)
-        if rec is None:
-            continue
-        d = r.diagnosis.diagnosis["tires"][t.tire]
-        left = d["unexplained"]
-        status = '<span class="ok">at the noise floor</span>' if left is None else \
-            (f'<span class="bad">unexplained {left["share"]:.1%} of the signal, '
-             f'{left["window"][0]:.2f}–{left["window"][1]:.2f} s</span>')
-        paper = t.paper["k"] / 1e3 if t.paper else None
-        wave = t.waveform["k"] / 1e3 if t.waveform else None
-        rows.append(f'<tr><td class="l">{_e(r.stem)}</td><td class="l">{t.tire}</td>'
-                    f'<td><b>{rec["k"] / 1e3:.2f}</b></td><td>{rec["k_ci"][0] / 1e3:.2f} – {rec["k_ci"][1] / 1e3:.2f}</td>'
-                    f'<td><b>{rec["c"] / 1e3:.3f}</b></td><td>{rec["c_ci"][0] / 1e3:.3f} – {rec["c_ci"][1] / 1e3:.3f}</td>'
-                    f'<td>{_f(paper, ".2f")}</td><td>{_f(wave, ".2f")}</td>'
-                    f'<td>{d["nrmse_before"]:.1%} → {d["nrmse_after"]:.1%}</td><td>{d["noise_nrmse"]:.1%}</td>'
-                    f'<td class="l">{status}</td></tr>')
-    return ('<section id="recommended"><h2>Recommended stiffness and damping (joint whole-tractor diagnosis)</h2>'
-            '<p class="note">One fit per recording: every channel at once under one body (heave, pitch, roll), with '
-            'the effects the diagnosis named; 95 % intervals from the joint fit. They hold if the model is right: '
-            'a tire whose residual stays above its noise floor is marked, and its intervals are conditional on the '
-            'model. NRMSE of the point-contact tires and of the extended tires, both as FMUs co-simulated under the '
-            'body with fmpy; "noise" is the NRMSE the measurement noise alone would give.</p>'
-            '<table><tr><th class="l">recording</th><th class="l">tire</th><th>K / kN·m⁻¹</th><th>K interval</th>'
-            '<th>C / kN·s·m⁻¹</th><th>C interval</th><th>K paper</th><th>K waveform</th><th>NRMSE</th>'
-            f'<th>noise</th><th class="l">residual</th></tr>{"".join(rows)}</table></section>')
+_HOWTO = ('<section id="howto"><h2>How to read this</h2><dl class="howto">'
+          '<dt>k, c</dt><dd>Tire vertical stiffness (N/m, shown kN/m) and damping (N·s/m, shown kN·s/m) of the '
+          'point-contact spring ∥ damper at the static load.</dd>'
+          '<dt>95 % interval</dt><dd>From the joint fit (sandwich covariance, with the move of the estimates when '
+          'the time step is halved); valid if the model is right.</dd>'
+          '<dt>NRMSE</dt><dd>RMS of measured − simulated over the RMS of the measured hub acceleration, after the '
+          'zero-phase 100 Hz low-pass.</dd>'
+          '<dt>noise NRMSE</dt><dd>The NRMSE the measurement noise alone would give: a fit at the noise floor '
+          'scores about this; "at the noise floor" means within 1.5× it.</dd>'
+          '<dt>unexplained</dt><dd>A channel whose residual stays above 1.5× its noise: the share of the signal '
+          'left and the window where it sits; its intervals are conditional on the model.</dd>'
+          '<dt>effects</dt><dd>What the four-corner point-contact model misses, named by forward selection '
+          '(BIC, ≥ 25 % of the residual removed, a physical check each).</dd>'
+          '<dt>paper / waveform / final</dt><dd>The paper\'s method reads k from the first two peaks of one damped '
+          'sinusoid; the waveform fit uses the whole free decay of the same one-corner model; the final model fits '
+          'every channel at once under the body with the named effects. Body cross-talk, footprint and lift-off '
+          'bias the first two, which is why they differ from the final values.</dd>'
+          '<dt>a_w, VDV</dt><dd>ISO 2631-1 frequency-weighted (Wk) RMS acceleration and vibration dose value at '
+          'the seat, on an ISO 8608 road.</dd></dl></section>')
+
+
+def _speed(figure: bytes | None) -> str:
+    if figure is None:
+        return ""
+    return ('<section id="speed"><h2>k and c against speed</h2><p class="note">Recommended (final) values with '
+            'their 95 % intervals, beside the paper\'s and the waveform values (and the rig truth where known).</p>'
+            + _img(figure, "k and c against speed") + "</section>")
 
 
 def _diagnosis_section(r) -> str:
@@ -206,6 +206,10 @@ def _tire_section(r, t) -> str:
     out = [f'<section id="tire-{_e(r.stem)}-{t.tire}"><h3>{_e(r.stem)} · {t.tire}</h3>']
     for err in t.errors:
         out.append(f'<p class="bad">{_e(err)}</p>')
+    if t.paper is not None:
+        out.append(f'<p class="note">Parameters exported to the point-contact FMU: '
+                   f'<a href="params/{_e(r.stem)}_{t.tire}.json">params/{_e(r.stem)}_{t.tire}.json</a>; '
+                   f'the recommended ones are in the verdict.</p>')
     if "decay" in t.figures:
         out.append(_img(t.figures["decay"], f"{r.stem} {t.tire} decay"))
     s = t.simulate
@@ -232,7 +236,8 @@ def _fmus(result: BatchResult) -> str:
         ok = not f.get("problems")
         verdict = '<span class="ok">validate_fmu: no problem</span>' if ok else \
             '<span class="bad">' + _e("; ".join(f["problems"])) + "</span>"
-        rows.append(f'<tr><td class="l"><code>{_e(f["file"])}</code></td><td class="l">{_e(f["kind"])}</td>'
+        rows.append(f'<tr><td class="l"><a href="{_e(f["file"])}"><code>{_e(f["file"])}</code></a></td>'
+                    f'<td class="l">{_e(f["kind"])}</td>'
                     f'<td class="l">{_e(f["role"])}</td><td class="l">{verdict}</td></tr>')
     return ('<section id="fmus"><h2>Exported FMUs</h2><p class="note">FMI 2.0 co-simulation, native C: binaries '
             'for linux64, win64 and darwin64 and the C sources inside; the importing machine needs no Python.</p>'
@@ -250,23 +255,59 @@ def _timings(result: BatchResult, extra: dict | None) -> str:
             f'<ul class="note">{more}</ul></section>')
 
 
-def render_report(result: BatchResult, *, title: str = "cleatfmu report", extra: dict | None = None) -> str:
-    """The report as an HTML string."""
+def render_report(result: BatchResult, *, title: str = "cleatfmu report", extra: dict | None = None,
+                  tables: dict | None = None, speed_png: bytes | None = None) -> str:
+    """The report as an HTML string (`tables` and `speed_png` as :func:`write_report` builds them)."""
+    tables = tables if tables is not None else build_tables(result, {})
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     tires = "".join(_tire_section(r, t) for r, t in _tires(result))
     diagnoses = "".join(_diagnosis_section(r) for r in result.recordings if r.diagnosis is not None)
-    return (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
+    return (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">'
+            f'<meta name="viewport" content="width=device-width, initial-scale=1"><title>{_e(title)}</title>'
             f'<style>{_CSS}</style></head><body><h1>{_e(title)}</h1><p class="note">cleatfmu {__version__}, {stamp}. '
             'Hub accelerations in m/s², gravity excluded; all comparisons after the zero-phase 100 Hz low-pass.</p>'
-            f'{_summary(result)}{_table4(result)}{_waveform(result)}{_recommended(result)}'
+            f'{_verdict(result, tables)}{_toc(result)}{_HOWTO}{_speed(speed_png)}{_summary(result)}'
+            '<section id="table4"><h2>Stiffness and damping by the paper\'s method (Table 4)</h2>'
+            '<p class="note">T and δ from the first two peaks, ζ and ω<sub>n</sub> by eqs. 7-8, K = m ω<sub>n</sub>²,'
+            ' C by the exponential fit through the first peak (eqs. 16-17), R² of the semi-log regression.</p>'
+            f'{tables["table4"].html(head=TABLE4_HEADS)}</section>'
+            '<section id="waveform"><h2>The methods side by side (kN/m, kN·s/m)</h2><p class="note">The paper\'s '
+            'method and the waveform fit model one corner; the final model, every channel under the body with the '
+            'named effects (see "how to read this").</p>'
+            f'{tables["methods"].html(head=METHODS_HEADS)}</section>'
             f'<section id="diagnoses"><h2>Whole-tractor diagnoses</h2>{diagnoses}</section>'
             f'<section id="tires"><h2>Tires: decay, point-contact co-simulation</h2>{tires}</section>'
             f'{_fmus(result)}{_timings(result, extra)}</body></html>\n')
 
 
+def build_tables(result: BatchResult, truths: dict) -> dict:
+    """Every table of the report, by CSV name."""
+    tables = [verdict_table(result, truths), table4_table(result), waveform_table(result), ride_table(result)]
+    return {t.name: t for t in tables}
+
+
+def _speed_png(result: BatchResult, truths: dict) -> bytes | None:
+    """k and c against speed per tire (final with intervals, paper, waveform, truth), or None (one speed)."""
+    points = []
+    for r, t in _tires(result):
+        rec = r.recommended(t.tire)
+        if rec is None or r.speed_kmh is None:
+            continue
+        truth = (truths.get(r.source) or {}).get("tires", {}).get(t.tire) or {}
+        points.append({"tire": t.tire, "speed_kmh": r.speed_kmh, "final": rec, "truth": truth,
+                       "paper": t.paper or {}, "waveform": t.waveform or {}})
+    if len({p["speed_kmh"] for p in points}) < 2:
+        return None
+    from .plots import plot_k_c_vs_speed, png_bytes
+    return png_bytes(plot_k_c_vs_speed(points))
+
+
 def write_report(result: BatchResult, *, title: str = "cleatfmu report", extra: dict | None = None) -> Path:
-    """Write ``report.html`` and ``summary.json`` into the batch's output folder; return the report's path."""
+    """Write ``report.html``, ``summary.json`` and ``tables/*.csv`` into the batch's output folder, as one set;
+    return the report's path."""
     out = Path(result.out_dir)
+    truths = {r.source: read_truth(r.source) for r in result.recordings}
+    tables = build_tables(result, truths)
     summary = {"recordings": [{"source": r.source, "ok": r.ok, "error": r.error,
                                "diagnosis": r.diagnosis.diagnosis if r.diagnosis is not None else None,
                                "diagnosis_fmus": r.diagnosis.fmus if r.diagnosis is not None else [],
@@ -277,6 +318,9 @@ def write_report(result: BatchResult, *, title: str = "cleatfmu report", extra: 
                                                   "errors": t.errors}
                                          for t in r.tires}} for r in result.recordings],
                "failures": result.failures, "seconds": result.seconds, "stage_seconds": result.timings}
-    atomic_write_texts({out / "report.html": render_report(result, title=title, extra=extra),
-                        out / "summary.json": json.dumps(summary, indent=1, default=float) + "\n"})
+    page = render_report(result, title=title, extra=extra, tables=tables, speed_png=_speed_png(result, truths))
+    (out / "tables").mkdir(exist_ok=True)
+    atomic_write_texts({out / "report.html": page,
+                        out / "summary.json": json.dumps(summary, indent=1, default=float) + "\n",
+                        **{out / "tables" / f"{name}.csv": csv_text(t) for name, t in tables.items()}})
     return out / "report.html"

@@ -14,7 +14,8 @@ import pytest
 
 from identification.rig import run_rig, write_run
 
-SECTIONS = ("summary", "table4", "waveform", "recommended", "diagnoses", "tires", "fmus", "timings")
+SECTIONS = ("recommended", "howto", "speed", "summary", "table4", "waveform", "diagnoses", "tires", "fmus",
+            "timings")
 
 
 @pytest.fixture(scope="module")
@@ -55,12 +56,38 @@ def test_demo_report_sections_tables_images(demo, cli):
             assert float(row[3]) == pytest.approx(entry["T"], abs=6e-4)
     # every embedded image is a PNG that decodes to a real picture
     images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', html)
-    assert len(images) == 8 * 2 + 2 * 2   # per tire: decay, co-simulation; per recording: diagnosis, ride
+    assert len(images) == 8 * 2 + 2 * 2 + 1   # per tire: decay, co-simulation; per recording: diagnosis, ride;
+    #                                           k, c against speed
     for data in images:
         pixels = _png(base64.b64decode(data))
         assert pixels.ndim == 3 and pixels.shape[0] > 200 and pixels.shape[1] > 400
         assert float(pixels[..., :3].std()) > 0.05
     assert "src=\"http" not in html and "<script" not in html   # self-contained, static
+    # the verdict first; at most 1 MB; no absolute paths of the machine it ran on
+    assert html.index('<section id="recommended">') < html.index('<section id="summary">')
+    assert (out / "report.html").stat().st_size <= 1_000_000
+    assert str(out) not in html and "identification/data" not in html
+
+
+def test_demo_tables_are_downloadable_and_say_what_the_report_says(demo):
+    import csv
+    code, out = demo
+    html = (out / "report.html").read_text()
+    summary = json.loads((out / "summary.json").read_text())
+    for name in ("verdict", "table4", "methods", "ride"):
+        assert f'href="tables/{name}.csv"' in html
+    rows = list(csv.DictReader((out / "tables" / "verdict.csv").open()))
+    assert len(rows) == 8
+    for row in rows:
+        r = next(r for r in summary["recordings"] if os.path.basename(r["source"]) == row["recording"] + ".csv")
+        rec = r["tires"][row["tire"]]["recommended"]
+        assert float(row["k_N_m"]) == pytest.approx(rec["k"], rel=1e-12)
+        assert float(row["c_ci_low"]) == pytest.approx(rec["c_ci"][0], rel=1e-12)
+        assert (out / row["fmu"]).is_file() and f'href="{row["fmu"]}"' in html
+        # the rig truth beside the estimates (display only), from the truth file next to the recording
+        assert float(row["k_truth_N_m"]) == pytest.approx(float(row["k_N_m"]), rel=0.03)
+    ride = list(csv.DictReader((out / "tables" / "ride.csv").open()))
+    assert {r["set"] for r in ride} == {"paper", "final", "static=300e3"} and len(ride) == 6
 
 
 def test_demo_fmus_are_valid_and_listed(demo):

@@ -1,0 +1,178 @@
+"""The report's tables, each built once and rendered twice: as HTML rows and as a CSV file to download.
+
+Every table is a :class:`Table` (plain values per row, SI units named in the
+column heads, plus the HTML of each row); :func:`csv_text` writes it.  The
+verdict shows, where a recording has a rig truth file beside it
+(``STEM.truth.json``, as the virtual rig and the embedded test days have),
+the true k and c beside the estimates: the report only displays it, no
+estimate depends on it.
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import io
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["Table", "verdict_table", "verdict_heads", "table4_table", "waveform_table", "ride_table", "csv_text",
+           "read_truth", "TABLE4_HEADS", "METHODS_HEADS"]
+
+
+@dataclass
+class Table:
+    """One table: its CSV name (``tables/<name>.csv``), column heads, rows of values, and rows as HTML."""
+
+    name: str
+    columns: list
+    rows: list = field(default_factory=list)
+    html_rows: list = field(default_factory=list)
+
+    def html(self, *, head: list | None = None) -> str:
+        """``<div class="scroll"><table>...</table></div>`` with `head` (HTML column heads, default the CSV's)."""
+        heads = "".join(f"<th>{h}</th>" for h in (head or [html.escape(c) for c in self.columns]))
+        return f'<div class="scroll"><table><tr>{heads}</tr>{"".join(self.html_rows)}</table></div>'
+
+
+def csv_text(table: Table) -> str:
+    """The table as CSV text (header row, then one row per table row; numbers in SI units as written)."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(table.columns)
+    writer.writerows(["" if v is None else v for v in row] for row in table.rows)
+    return buf.getvalue()
+
+
+def _e(x) -> str:
+    return html.escape(str(x))
+
+
+def _td(x, fmt: str, scale: float = 1.0, cls: str = "") -> str:
+    attr = f' class="{cls}"' if cls else ""
+    return f"<td{attr}>–</td>" if x is None else f"<td{attr}>{format(x * scale, fmt)}</td>"
+
+
+def read_truth(source) -> dict | None:
+    """The rig truth beside a recording (``STEM.truth.json``), or None (display only)."""
+    path = Path(source).with_suffix(".truth.json")
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        return doc if doc.get("format", "").startswith("cleat-rig-truth/") else None
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def _tires(result):
+    for r in result.recordings:
+        for t in r.tires:
+            yield r, t
+
+
+def verdict_table(result, truths: dict) -> Table:
+    """Per tire: the recommended k, c (the final model's, in the extended FMU) with intervals, the effects
+    named, the fit against the noise floor and a plain flag; the rig truth where there is one."""
+    with_truth = any(truths.values())
+    table = Table("verdict", ["recording", "speed_km_h", "tire", "k_N_m", "k_ci_low", "k_ci_high", "c_Ns_m",
+                              "c_ci_low", "c_ci_high", "effects", "nrmse_after", "noise_nrmse", "verdict",
+                              "unexplained_share", "fmu"] + (["k_truth_N_m", "c_truth_Ns_m"] if with_truth else []))
+    for r, t in _tires(result):
+        rec = r.recommended(t.tire)
+        if rec is None:
+            continue
+        d = r.diagnosis.diagnosis
+        dt = d["tires"][t.tire]
+        left = dt["unexplained"]
+        effects = ", ".join(d["effects"]) or "none"
+        fmu = next((f["file"] for f in r.diagnosis.fmus if f["file"].endswith(f"_{t.tire}.fmu")), None)
+        truth = (truths.get(r.source) or {}).get("tires", {}).get(t.tire)
+        verdict = "at the noise floor" if left is None else "unexplained"
+        row = [r.stem, r.speed_kmh, t.tire, rec["k"], *rec["k_ci"], rec["c"], *rec["c_ci"], effects,
+               dt["nrmse_after"], dt["noise_nrmse"], verdict, None if left is None else left["share"], fmu]
+        if with_truth:
+            row += [truth["k"] if truth else None, truth["c"] if truth else None]
+        table.rows.append(row)
+        flag = '<span class="ok">at the noise floor</span>' if left is None else \
+            (f'<span class="bad">unexplained: {left["share"]:.1%} of the signal, '
+             f'{left["window"][0]:.2f}–{left["window"][1]:.2f} s; intervals conditional on the model</span>')
+        link = f'<a href="{_e(fmu)}">{t.tire}.fmu</a>' if fmu else "–"
+        cells = (f'<td class="l"><a href="#diagnosis-{_e(r.stem)}">{_e(r.stem)}</a></td>'
+                 f'<td>{r.speed_kmh:.3g}</td><td class="l"><a href="#tire-{_e(r.stem)}-{t.tire}">{t.tire}</a></td>'
+                 f'<td><b>{rec["k"] / 1e3:.2f}</b></td><td>{rec["k_ci"][0] / 1e3:.2f}–{rec["k_ci"][1] / 1e3:.2f}</td>'
+                 f'<td><b>{rec["c"] / 1e3:.3f}</b></td><td>{rec["c_ci"][0] / 1e3:.3f}–{rec["c_ci"][1] / 1e3:.3f}</td>')
+        if with_truth:
+            cells += _td(truth["k"] if truth else None, ".2f", 1e-3, "truth") + \
+                _td(truth["c"] if truth else None, ".3f", 1e-3, "truth")
+        cells += (f'<td>{dt["nrmse_after"]:.1%}</td><td>{dt["noise_nrmse"]:.1%}</td>'
+                  f'<td class="l">{flag}</td><td class="l">{link}</td>')
+        table.html_rows.append(f"<tr>{cells}</tr>")
+    return table
+
+
+def verdict_heads(table: Table) -> list:
+    heads = ['recording', 'km/h', 'tire', 'K / kN·m⁻¹', 'K 95 %', 'C / kN·s·m⁻¹', 'C 95 %']
+    if "k_truth_N_m" in table.columns:
+        heads += ['K rig truth', 'C rig truth']
+    return heads + ['NRMSE', 'noise NRMSE', 'verdict', 'extended FMU']
+
+
+def table4_table(result) -> Table:
+    """The paper's Table 4 for every speed and tire."""
+    table = Table("table4", ["speed_km_h", "recording", "tire", "T_s", "zeta", "delta", "omega_n_rad_s", "k_N_m",
+                             "c_Ns_m", "r2", "peaks"])
+    for r, t in sorted(_tires(result), key=lambda rt: (rt[0].speed_kmh or 0, rt[1].tire)):
+        p = t.paper
+        if p is None:
+            table.rows.append([r.speed_kmh, r.stem, t.tire] + [None] * 8)
+            table.html_rows.append(f'<tr><td>{r.speed_kmh:.4g}</td><td class="l">{_e(r.stem)}</td>'
+                                   f'<td class="l">{t.tire}</td><td class="l bad" colspan="8">not identified</td></tr>')
+            continue
+        table.rows.append([r.speed_kmh, r.stem, t.tire, p["T"], p["zeta"], p["delta"], p["omega_n"], p["k"], p["c"],
+                           p["r2"], p["n_peaks"]])
+        table.html_rows.append(
+            f'<tr><td>{r.speed_kmh:.4g}</td><td class="l">{_e(r.stem)}</td><td class="l">{t.tire}</td>'
+            f'<td>{p["T"]:.3f}</td><td>{p["zeta"]:.3f}</td><td>{p["delta"]:.3f}</td>'
+            f'<td>{p["omega_n"]:.2f}</td><td>{p["k"] / 1e3:.2f}</td><td>{p["c"] / 1e3:.2f}</td>'
+            f'<td>{p["r2"]:.2f}</td><td>{p["n_peaks"]}</td></tr>')
+    return table
+
+
+TABLE4_HEADS = ['speed / km·h⁻¹', 'recording', 'tire', 'T / s', 'ζ', 'δ', 'ω<sub>n</sub> / rad·s⁻¹', 'K / kN·m⁻¹',
+                'C / kN·s·m⁻¹', 'R²', 'peaks']
+
+
+def waveform_table(result) -> Table:
+    """The methods side by side per tire: the paper's, the waveform fit (with its intervals) and the final."""
+    table = Table("methods", ["recording", "tire", "k_paper_N_m", "k_waveform_N_m", "k_waveform_ci_low",
+                              "k_waveform_ci_high", "k_final_N_m", "c_paper_Ns_m", "c_waveform_Ns_m",
+                              "c_final_Ns_m", "waveform_r2"])
+    for r, t in _tires(result):
+        p, w, f = t.paper, t.waveform, r.recommended(t.tire)
+        table.rows.append([r.stem, t.tire, p and p["k"], w and w["k"], w and w["k_ci"][0], w and w["k_ci"][1],
+                           f and f["k"], p and p["c"], w and w["c"], f and f["c"], w and w["r2"]])
+        ci = "–" if w is None else f'{w["k_ci"][0] / 1e3:.2f} – {w["k_ci"][1] / 1e3:.2f}'
+        table.html_rows.append(
+            f'<tr><td class="l">{_e(r.stem)}</td><td class="l">{t.tire}</td>'
+            + _td(p and p["k"], ".2f", 1e-3) + _td(w and w["k"], ".2f", 1e-3) + f"<td>{ci}</td>"
+            + _td(f and f["k"], ".2f", 1e-3, "final") + _td(p and p["c"], ".3f", 1e-3) + _td(w and w["c"], ".3f", 1e-3)
+            + _td(f and f["c"], ".3f", 1e-3, "final") + _td(w and w["r2"], ".4f") + "</tr>")
+    return table
+
+
+METHODS_HEADS = ['recording', 'tire', 'K paper', 'K waveform', 'K waveform 95 %', 'K final', 'C paper',
+                 'C waveform', 'C final', 'waveform R²']
+
+
+def ride_table(result) -> Table:
+    """Every recording's ride: a_w, VDV, MTVV and crest factor at the seat per parameter set."""
+    table = Table("ride", ["recording", "road_class", "speed_m_s", "set", "k_FL_N_m", "k_FR_N_m", "k_RL_N_m",
+                           "k_RR_N_m", "a_w_m_s2", "vdv_m_s175", "mtvv_m_s2", "crest_factor"])
+    for r in result.recordings:
+        d = r.diagnosis.ride if r.diagnosis is not None else None
+        if d is None:
+            continue
+        for name, s in d["sets"].items():
+            table.rows.append([r.stem, d["road"]["class"], d["speed_m_s"], name, *s["k"].values(), s["a_w"],
+                               s["vdv"], s["mtvv"], s["crest_factor"]])
+    return table
