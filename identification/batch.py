@@ -256,6 +256,21 @@ def _job(args):
         return rep
 
 
+def remove_staging(out_dir) -> list[Path]:
+    """Remove the staging files a killed run left in a report folder (``.NAME.*.tmp`` of the atomic writes,
+    ``.NAME.*.fmu.part`` of the FMU builds); return them."""
+    removed = []
+    for sub in ("", "fmu", "params", "tables"):
+        folder = Path(out_dir) / sub
+        if not folder.is_dir():
+            continue
+        for path in folder.iterdir():
+            if path.name.startswith(".") and path.name.endswith((".tmp", ".fmu.part")) and path.is_file():
+                path.unlink(missing_ok=True)
+                removed.append(path)
+    return removed
+
+
 def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = True) -> BatchResult:
     """Process recordings into `out_dir` (fmu/, params/); the caller renders the report.
 
@@ -276,6 +291,7 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
     out_dir = Path(out_dir)
     for sub in ("", "fmu", "params"):
         (out_dir / sub).mkdir(parents=True, exist_ok=True)
+    remove_staging(out_dir)
     reports, jobs, stems = [], [], set()
     for path in paths:
         stem = Path(path).stem
@@ -296,22 +312,19 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
     from tqdm import tqdm
     bar = tqdm(total=len(jobs), desc="cleatfmu", unit="job", delay=1.0, disable=None if progress else True)
     results = []
+    from .workers import process_pool, stop_pool
+    pool = process_pool(workers)
     try:
-        if workers > 1:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
-            from .diagnose.select import single_thread_blas
-            with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
-                                     initializer=single_thread_blas) as pool:
-                for rep in pool.map(_job, jobs):
-                    results.append(rep)
-                    bar.update(1)
-        else:
-            for job in jobs:
-                results.append(_job(job))
-                bar.update(1)
+        for rep in (pool.map(_job, jobs) if pool else map(_job, jobs)):
+            results.append(rep)
+            bar.update(1)
+    except BaseException:   # Ctrl-C (or a bug): stop the workers now, not after their jobs
+        stop_pool(pool)
+        raise
     finally:
         bar.close()
+    if pool:
+        pool.shutdown()
     by_stem = {r.stem: r for r in reports}
     for rep in results:
         if isinstance(rep, DiagnosisReport):

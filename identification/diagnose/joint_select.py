@@ -243,7 +243,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     channels : iterable of str, optional
         Channels to use (default: all recorded).
     """
-    from .select import _pool
+    from ..workers import process_pool, stop_pool
 
     t0 = time.perf_counter()
     tick = progress or (lambda label: None)
@@ -252,7 +252,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     start0 = starting_values(pb)
     n = int(pb.window.sum()) * len(pb.channels)
     n_eff = n * min(1.0, 2 * cutoff_hz / rec.sample_rate_hz)
-    pool = _pool(workers)
+    pool = process_pool(workers)
     try:
         run = _select(pb, start0, effects, pool, tick, n, n_eff)
         rescue = None
@@ -265,9 +265,11 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
                       "residual_to_noise_after": max(_residual_to_noise(second)), "kept": bool(better)}
             if better:
                 run, start0 = second, start1
-    finally:
-        if pool:
-            pool.shutdown()
+    except BaseException:
+        stop_pool(pool)
+        raise
+    if pool:
+        pool.shutdown()
     return TractorDiagnosis(problem=pb, effects=run["selected"], baseline=run["baseline"], final=run["final"],
                             rounds=run["rounds"], evidence=run["evidence"], unexplained=run["unexplained"],
                             seconds=time.perf_counter() - t0,

@@ -31,6 +31,7 @@ import numpy as np
 from ..errors import InputError
 from ..identify import identify_paper
 from ..waveform import identify_waveform
+from ..workers import process_pool, stop_pool
 from .evidence import check
 from .fit import Fit, fit_model, scan_arrival, sse_at
 from .models import EFFECTS, PARAMETERS, Model, Problem
@@ -191,25 +192,6 @@ def _judge(cand: Candidate, current_sse: float, current_p: int, n: int, n_eff: f
     return Candidate(cand.effect, fit, float(dbic), float(gain), cand.passed_gate, qualified, cand.evidence)
 
 
-def single_thread_blas() -> None:
-    """Hold BLAS to one thread in this (worker) process: with one worker per core, BLAS threads on top
-    oversubscribe the cores, and a small matrix product then waits for a busy core (seen: 5 ms -> 0.5 s)."""
-    from threadpoolctl import threadpool_limits
-    threadpool_limits(limits=1, user_api="blas")
-
-
-def _pool(workers: int):
-    if workers <= 1:
-        return None
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-    try:
-        return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
-                                   initializer=single_thread_blas)
-    except (ValueError, OSError):
-        return None
-
-
 def diagnose(rec, tire: str, *, cutoff_hz: float = 100.0, progress=None, effects=EFFECTS,
              workers: int = 1) -> Diagnosis:
     """Diagnose one tire of a recording.
@@ -240,7 +222,7 @@ def diagnose(rec, tire: str, *, cutoff_hz: float = 100.0, progress=None, effects
     n_eff = n * min(1.0, 2 * cutoff_hz / rec.sample_rate_hz)
     current, selected, rounds, evidence = baseline, [], [], {}
     candidates_all = [e for e in effects if e != "axle_coupling" or pb.other is not None]
-    pool = _pool(workers)
+    pool = process_pool(workers)
     try:
         while len(selected) < MAX_EFFECTS:
             tries = sorted((e for e in candidates_all if e not in selected), key=lambda e: -_COST.get(e, 1))
@@ -259,9 +241,11 @@ def diagnose(rec, tire: str, *, cutoff_hz: float = 100.0, progress=None, effects
             current = fit_model(best.fit.model, best.fit.params, budget=FINAL_BUDGET)
             selected.append(best.effect)
             evidence[best.effect] = best.evidence
-    finally:
-        if pool:
-            pool.shutdown()
+    except BaseException:
+        stop_pool(pool)
+        raise
+    if pool:
+        pool.shutdown()
     # evidence restated with the final model where it still holds against the model without that effect
     for effect in selected:
         others = [e for e in selected if e != effect]
