@@ -43,7 +43,7 @@ class TireReport:
     paper: dict | None = None
     waveform: dict | None = None
     simulate: dict | None = None
-    figures: dict = field(default_factory=dict)      # name -> PNG bytes
+    figures: dict = field(default_factory=dict)      # name -> PNG bytes (a Path once streamed to disk)
     fmus: list = field(default_factory=list)         # {"file", "kind", "problems": [...]}
     errors: list = field(default_factory=list)       # "stage: message"
     timings: dict = field(default_factory=dict)      # stage -> s
@@ -258,8 +258,13 @@ def _job(args):
 
 def remove_staging(out_dir) -> list[Path]:
     """Remove the staging files a killed run left in a report folder (``.NAME.*.tmp`` of the atomic writes,
-    ``.NAME.*.fmu.part`` of the FMU builds); return them."""
+    ``.NAME.*.fmu.part`` of the FMU builds, the figures' staging folder); return them."""
     removed = []
+    staging = Path(out_dir) / FIGURES_STAGING
+    if staging.is_dir():
+        import shutil
+        removed.append(staging)
+        shutil.rmtree(staging, ignore_errors=True)
     for sub in ("", "fmu", "params", "tables"):
         folder = Path(out_dir) / sub
         if not folder.is_dir():
@@ -271,7 +276,22 @@ def remove_staging(out_dir) -> list[Path]:
     return removed
 
 
-def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = True) -> BatchResult:
+#: Staging folder of the figures while a batch runs (each result's figures go to disk as it arrives).
+FIGURES_STAGING = ".figures-staging"
+
+
+def _stream_figures(rep, folder: Path) -> None:
+    """Write a job result's figures into `folder` and keep only their paths (the parent's memory stays bounded)."""
+    name = rep.recording if isinstance(rep, DiagnosisReport) else f"{rep.recording}_{rep.tire}"
+    for key, png in list(rep.figures.items()):
+        if isinstance(png, (bytes, bytearray)):
+            path = folder / f"{name}_{key}.png"
+            path.write_bytes(png)
+            rep.figures[key] = path
+
+
+def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = True,
+              scheduler: str | None = None) -> BatchResult:
     """Process recordings into `out_dir` (fmu/, params/); the caller renders the report.
 
     Parameters
@@ -284,6 +304,11 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
         Processes (default: the machine's cores).
     progress : bool
         Progress bar on stderr (on a terminal, after one second).
+    scheduler : str, optional
+        Address of a Dask distributed scheduler: the jobs run on its workers
+        (:class:`~identification.executors.DaskExecutor`; recordings and `out_dir` on a file system they
+        share), else on `workers` local processes.  Either way each result's figures go to
+        ``out_dir/.figures-staging/`` as it arrives (:func:`_stream_figures`).
     """
     from .recording import read_recording
 
@@ -292,6 +317,8 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
     for sub in ("", "fmu", "params"):
         (out_dir / sub).mkdir(parents=True, exist_ok=True)
     remove_staging(out_dir)
+    figures = out_dir / FIGURES_STAGING
+    figures.mkdir()
     reports, jobs, stems = [], [], set()
     for path in paths:
         stem = Path(path).stem
@@ -310,21 +337,17 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
         jobs += [("tire", str(path), stem, tire, str(out_dir)) for tire in rec.tires]
     workers = max(1, min(workers or os.cpu_count() or 1, len(jobs) or 1))
     from tqdm import tqdm
+    from .executors import executor_for
     bar = tqdm(total=len(jobs), desc="cleatfmu", unit="job", delay=1.0, disable=None if progress else True)
     results = []
-    from .workers import process_pool, stop_pool
-    pool = process_pool(workers)
     try:
-        for rep in (pool.map(_job, jobs) if pool else map(_job, jobs)):
-            results.append(rep)
-            bar.update(1)
-    except BaseException:   # Ctrl-C (or a bug): stop the workers now, not after their jobs
-        stop_pool(pool)
-        raise
+        with executor_for(workers, scheduler) as executor:
+            for rep in executor.map_unordered(_job, jobs):
+                _stream_figures(rep, figures)
+                results.append(rep)
+                bar.update(1)
     finally:
         bar.close()
-    if pool:
-        pool.shutdown()
     by_stem = {r.stem: r for r in reports}
     for rep in results:
         if isinstance(rep, DiagnosisReport):

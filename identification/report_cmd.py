@@ -12,7 +12,8 @@ from .errors import InputError
 __all__ = ["add_parser"]
 
 
-def _run(paths, out, *, title: str, workers: int | None, extra: dict | None = None) -> int:
+def _run(paths, out, *, title: str, workers: int | None, extra: dict | None = None,
+         scheduler: str | None = None) -> int:
     from .batch import run_batch
     from .report_html import write_report
 
@@ -22,7 +23,9 @@ def _run(paths, out, *, title: str, workers: int | None, extra: dict | None = No
     if not out.parent.resolve().is_dir():
         raise InputError(out, "parent directory does not exist")
     t0 = time.perf_counter()
-    result = run_batch(paths, out, workers=workers)
+    if workers is not None and workers < 1:
+        raise InputError("--workers", f"at least 1, got {workers}")
+    result = run_batch(paths, out, workers=workers, scheduler=scheduler)
     t_report = time.perf_counter()
     report = write_report(result, title=title, extra=extra)
     n_tires = sum(len(r.tires) for r in result.recordings)
@@ -46,7 +49,8 @@ def run_demo(args) -> int:
 
 def run_report(args) -> int:
     from .batch import collect_recordings
-    return _run(collect_recordings(args.inputs), args.output, title=args.title, workers=args.workers)
+    return _run(collect_recordings(args.inputs), args.output, title=args.title, workers=args.workers,
+                scheduler=args.scheduler)
 
 
 def add_parser(subparsers) -> None:
@@ -68,4 +72,7 @@ def add_parser(subparsers) -> None:
     r.add_argument("-o", "--output", required=True, metavar="OUT", help="output folder")
     r.add_argument("--title", default="cleatfmu report", help="report title")
     r.add_argument("--workers", type=int, default=workers, help="processes (default: the machine's cores)")
+    r.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="run the jobs on a Dask distributed cluster (e.g. tcp://host:8786; the recordings and OUT "
+                        "on a file system its workers share) instead of local processes (default: local)")
     r.set_defaults(func=run_report)

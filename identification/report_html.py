@@ -18,11 +18,13 @@ import base64
 import datetime as _dt
 import html
 import json
+import os
+import shutil
 from pathlib import Path
 
 from . import __version__
 from ._files import atomic_write_texts
-from .batch import BatchResult
+from .batch import FIGURES_STAGING, BatchResult
 from .report_tables import (METHODS_HEADS, TABLE4_HEADS, csv_text, read_truth, ride_table, table4_table,
                             verdict_heads, verdict_table, waveform_table)
 
@@ -53,7 +55,17 @@ def _e(x) -> str:
     return html.escape(str(x))
 
 
-def _img(png: bytes, alt: str) -> str:
+#: Largest batch whose figures are embedded in the report; a larger one links them (``figures/*.png``),
+#: so that neither the page nor the process writing it grows with the batch.
+EMBED_MAX_RECORDINGS = 20
+
+
+def _img(png, alt: str) -> str:
+    """An image: PNG bytes or a staged file embedded as a data URI, a file under ``figures/`` linked."""
+    if isinstance(png, Path):
+        if png.parent.name == "figures":
+            return f'<img alt="{_e(alt)}" loading="lazy" src="figures/{_e(png.name)}">'
+        png = png.read_bytes()
     return f'<img alt="{_e(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode("ascii")}">'
 
 
@@ -318,9 +330,25 @@ def write_report(result: BatchResult, *, title: str = "cleatfmu report", extra: 
                                                   "errors": t.errors}
                                          for t in r.tires}} for r in result.recordings],
                "failures": result.failures, "seconds": result.seconds, "stage_seconds": result.timings}
+    staging = out / FIGURES_STAGING
+    if len(result.recordings) > EMBED_MAX_RECORDINGS and staging.is_dir():
+        _publish_figures(result, staging, out / "figures")
     page = render_report(result, title=title, extra=extra, tables=tables, speed_png=_speed_png(result, truths))
     (out / "tables").mkdir(exist_ok=True)
     atomic_write_texts({out / "report.html": page,
                         out / "summary.json": json.dumps(summary, indent=1, default=float) + "\n",
                         **{out / "tables" / f"{name}.csv": csv_text(t) for name, t in tables.items()}})
+    shutil.rmtree(staging, ignore_errors=True)
     return out / "report.html"
+
+
+def _publish_figures(result: BatchResult, staging: Path, target: Path) -> None:
+    """Move the staged figures to ``figures/`` (replacing an earlier run's) and point the reports at them."""
+    if target.exists():
+        shutil.rmtree(target)
+    os.replace(staging, target)
+    for r in result.recordings:
+        for rep in list(r.tires) + ([r.diagnosis] if r.diagnosis is not None else []):
+            for key, path in rep.figures.items():
+                if isinstance(path, Path):
+                    rep.figures[key] = target / path.name

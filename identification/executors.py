@@ -1,0 +1,98 @@
+"""Where a batch's jobs run: this machine's process pool or a Dask distributed cluster, behind one interface.
+
+An executor is a context manager with ``map_unordered(fn, jobs)``, which yields
+``fn(job)`` for every job as the results come in (in any order).  A job and its
+result must be picklable; on a cluster, the recordings and the output folder
+must be reachable under the same paths from every worker (a shared file
+system), as the jobs read the recording and write the FMUs themselves.
+"""
+
+from __future__ import annotations
+
+from .errors import InputError
+
+__all__ = ["LocalExecutor", "DaskExecutor", "executor_for"]
+
+
+class LocalExecutor:
+    """`workers` processes on this machine (:func:`identification.workers.process_pool`), or this process
+    alone for one worker."""
+
+    def __init__(self, workers: int):
+        self.workers = max(1, int(workers))
+        self._pool = None
+
+    def __enter__(self):
+        from .workers import process_pool
+        self._pool = process_pool(self.workers)
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        from .workers import stop_pool
+        if self._pool is not None:
+            if exc_type is None:
+                self._pool.shutdown()
+            else:                         # interrupted: stop the workers now, not after their jobs
+                stop_pool(self._pool)
+        self._pool = None
+        return False
+
+    def map_unordered(self, fn, jobs):
+        if self._pool is None:
+            yield from map(fn, jobs)
+            return
+        from concurrent.futures import as_completed
+        futures = [self._pool.submit(fn, job) for job in jobs]
+        for future in as_completed(futures):
+            yield future.result()
+
+
+_SCHEMES = ("tcp", "tls", "ws", "wss", "inproc", "ucx")
+
+
+class DaskExecutor:
+    """The workers of a Dask distributed scheduler at `address` (e.g. ``tcp://10.0.0.5:8786``)."""
+
+    def __init__(self, address: str, *, timeout_s: float = 10.0):
+        self.address = address
+        self.timeout_s = timeout_s
+        self._client = None
+
+    def __enter__(self):
+        try:
+            from distributed import Client
+        except ImportError:
+            raise InputError("--scheduler", "needs the 'distributed' package (pip install 'cleatfmu[cluster]')") \
+                from None
+        scheme = self.address.split("://", 1)[0] if "://" in self.address else "tcp"
+        if scheme not in _SCHEMES or not self.address.strip():
+            raise InputError("--scheduler", f"{self.address!r} is not a Dask scheduler address "
+                                            f"(e.g. tcp://host:8786; schemes: {', '.join(_SCHEMES)})")
+        try:
+            self._client = Client(self.address, timeout=self.timeout_s, set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise InputError("--scheduler", f"cannot reach the Dask scheduler at {self.address!r}: "
+                                            f"{exc.__class__.__name__}: {exc}") from None
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if self._client is not None:
+            self._client.close()
+        self._client = None
+        return False
+
+    def map_unordered(self, fn, jobs):
+        from distributed import as_completed
+        futures = self._client.map(fn, list(jobs), pure=False)
+        for future in as_completed(futures, loop=self._client.loop):
+            result = future.result()
+            future.release()          # the cluster forgets each result once the parent has it
+            yield result
+
+
+def executor_for(workers: int | None, scheduler: str | None = None):
+    """A :class:`DaskExecutor` for `scheduler`, else a :class:`LocalExecutor` of `workers` processes."""
+    if scheduler:
+        return DaskExecutor(scheduler)
+    import os
+    return LocalExecutor(workers or os.cpu_count() or 1)

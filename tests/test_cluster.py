@@ -1,0 +1,49 @@
+"""Batches on a Dask distributed cluster: the same results as on local processes, figures streamed to disk."""
+
+import json
+
+import pytest
+
+from identification.rig import run_rig, write_run
+
+distributed = pytest.importorskip("distributed")
+
+
+@pytest.fixture(scope="module")
+def day(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("day")
+    for i, effects in enumerate(((), ("enveloping",))):
+        write_run(run_rig(effects, {"sensor.channels": "FL"}, seed=20 + i), folder / f"run_{i}")
+    return folder
+
+
+def _numbers(out):
+    summary = json.loads((out / "summary.json").read_text())
+    return {r["source"].rsplit("/", 1)[-1]: (r["diagnosis"]["tires"]["FL"]["k"], r["diagnosis"]["tires"]["FL"]["c"],
+                                             r["tires"]["FL"]["paper"]["k"], r["tires"]["FL"]["waveform"]["k"])
+            for r in summary["recordings"]}
+
+
+def test_a_report_on_a_dask_cluster_equals_the_local_one(cli, day, tmp_path):
+    local = cli("report", day, "-o", tmp_path / "local", "--workers", "1")
+    assert local.code == 0, local.err
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cl:
+        res = cli("report", day, "-o", tmp_path / "cluster", "--scheduler", cl.scheduler_address)
+    assert res.code == 0, res.err
+    assert _numbers(tmp_path / "cluster") == _numbers(tmp_path / "local")
+    html = (tmp_path / "cluster" / "report.html").read_text()
+    assert html.count("data:image/png;base64,") >= 4          # a small batch: figures embedded
+    assert not (tmp_path / "cluster" / ".figures-staging").exists()
+
+
+@pytest.mark.parametrize("address, problem", [("nonsense://x", "not a Dask scheduler address"),
+                                              ("tcp://127.0.0.1:1", "cannot reach the Dask scheduler")])
+def test_an_unusable_scheduler_is_one_line_and_exit_2(cli, day, tmp_path, address, problem):
+    from identification import executors
+    executors.DaskExecutor.__init__.__defaults__ = (1.0,)      # a short connection timeout for the test
+    try:
+        res = cli("report", day, "-o", tmp_path / "out", "--scheduler", address)
+    finally:
+        executors.DaskExecutor.__init__.__defaults__ = (10.0,)
+    assert res.code == 2 and res.err.startswith("cleatfmu: error: --scheduler:") and problem in res.err, res.err
+    assert res.err.count("\n") == 1
