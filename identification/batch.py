@@ -200,7 +200,7 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
 def diagnose_recording(csv_path: str, stem: str, out_dir: str) -> DiagnosisReport:
     """Diagnose every channel of a recording jointly; keep one extended FMU per tire (in a worker process)."""
     from .diagnose.command import run_tractor_diagnosis
-    from .plots import plot_tractor_diagnosis, png_bytes
+    from .plots import plot_impact_zooms, plot_tractor_diagnosis, png_bytes
     from .recording import read_recording
 
     rep = DiagnosisReport(recording=stem)
@@ -220,6 +220,7 @@ def diagnose_recording(csv_path: str, stem: str, out_dir: str) -> DiagnosisRepor
     with _timed(rep.timings, "figures"):
         rep.figures["diagnosis"] = png_bytes(plot_tractor_diagnosis(diag, nrmse_before=gain.nrmse_before,
                                                                     nrmse_after=gain.nrmse_after))
+        rep.figures["impacts"] = png_bytes(plot_impact_zooms(diag), dpi=85)
     with _timed(rep.timings, "validate"):
         for entry in rep.fmus:
             entry["problems"] = _validate(Path(out_dir) / entry["file"])

@@ -14,7 +14,7 @@ import numpy as np
 from ._files import atomic_write_bytes
 
 __all__ = ["figure", "save_png", "png_bytes", "plot_decay", "plot_log_peaks", "plot_comparison", "plot_diagnosis",
-           "plot_tractor_diagnosis", "plot_ride", "plot_k_c_vs_speed"]
+           "plot_tractor_diagnosis", "plot_impact_zooms", "plot_ride", "plot_k_c_vs_speed"]
 
 
 def figure(nrows=1, ncols=1, *, size=(9.0, 4.0), **kwargs):
@@ -178,6 +178,36 @@ def plot_tractor_diagnosis(diag, *, nrmse_before=None, nrmse_after=None):
                        label=f"unexplained {left['share']:.1%} of the signal")
         finish_channel_axis(ax, pb.measured[ch][w])
     return finish_channel_figure(fig, axes, f"{Path(pb.rec.source).name}: effects found: {label}")
+
+
+def plot_impact_zooms(diag, *, before_s: float = 0.1, after_s: float = 0.4):
+    """Every channel around its own wheel's cleat impact: measured vs the four corners and the final model
+    (the full-length overlays squeeze an impact into a few pixels)."""
+    pb = diag.problem
+    t = pb.rec.time_s
+    arrivals = diag.final.model.arrivals(diag.final.params)
+    n = len(pb.channels)
+    cols = 2 if n > 1 else 1
+    rows = (n + cols - 1) // cols
+    fig, axes = figure(rows, cols, size=(11.0, 2.6 * rows + 0.6), squeeze=False)
+    for ax, ch in zip(axes.flat, pb.channels):
+        sel = (t >= arrivals[ch] - before_s) & (t <= arrivals[ch] + after_s)
+        ax.plot(t[sel], pb.measured[ch][sel], color="C0", lw=1.2, label=f"{ch} measured")
+        ax.plot(t[sel], diag.baseline.prediction[ch][sel], color="C7", lw=0.9, ls="--", label="corners")
+        ax.plot(t[sel], diag.final.prediction[ch][sel], color="C3", lw=0.9, label="final")
+        ax.axvline(arrivals[ch], color="k", lw=0.6, ls=":")
+        peak = float(np.max(np.abs(pb.measured[ch][sel]))) if sel.any() else 1.0
+        ax.set_ylim(-1.3 * peak, 1.3 * peak)
+        ax.set_title(f"{ch}: its cleat at {arrivals[ch]:.3f} s (dotted)", fontsize=8)
+        ax.set_xlabel("time / s")
+        ax.set_ylabel("m/s²")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    for ax in list(axes.flat)[n:]:
+        ax.set_visible(False)
+    fig.suptitle(f"{Path(pb.rec.source).name}: impacts", fontsize=9)
+    fig.tight_layout()
+    return fig
 
 
 def finish_channel_axis(ax, measured) -> None:

@@ -182,6 +182,8 @@ def _diagnosis_section(r) -> str:
             out.append(f'<div class="effect"><b>{_e(name)}</b>: {_e(d["evidence"].get(name, ""))}</div>')
         if "diagnosis" in rep.figures:
             out.append(_img(rep.figures["diagnosis"], f"{r.stem} whole-tractor diagnosis"))
+        if "impacts" in rep.figures:
+            out.append(_img(rep.figures["impacts"], f"{r.stem} impacts"))
     if rep.ride is not None:
         out.append(_ride(r.stem, rep))
     out.append("</section>")

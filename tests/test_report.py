@@ -56,8 +56,8 @@ def test_demo_report_sections_tables_images(demo, cli):
             assert float(row[3]) == pytest.approx(entry["T"], abs=6e-4)
     # every embedded image is a PNG that decodes to a real picture
     images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', html)
-    assert len(images) == 8 * 2 + 2 * 2 + 1   # per tire: decay, co-simulation; per recording: diagnosis, ride;
-    #                                           k, c against speed
+    assert len(images) == 8 * 2 + 2 * 3 + 1   # per tire: decay, co-simulation; per recording: diagnosis, impacts,
+    #                                           ride; k, c against speed
     for data in images:
         pixels = _png(base64.b64decode(data))
         assert pixels.ndim == 3 and pixels.shape[0] > 200 and pixels.shape[1] > 400
