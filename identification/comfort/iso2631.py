@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ._checks import positive
 
 __all__ = ["Weighting", "WEIGHTINGS", "get_weighting", "weighting_response", "weight", "running_rms", "mtvv",
            "vdv", "crest_factor", "daily_exposure", "vdv_exposure", "Exposure", "ComfortResult", "comfort",
@@ -145,13 +146,7 @@ def weighting_response(frequency_hz, weighting: str | Weighting = "Wk") -> np.nd
 
 
 def _positive(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(name, f"must be a number, got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise InputError(name, f"must be finite and > 0, got {value!r}")
-    return v
+    return positive(name, value)
 
 
 def _rate(sample_rate_hz, w: Weighting | None = None) -> float:

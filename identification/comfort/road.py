@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ._checks import positive
 
 __all__ = ["ISO8608_N0_CPM", "ISO8608_WAVINESS", "ISO8608_BAND_CPM", "ISO8608_GD_N0_M3", "CLEAT_HEIGHT_M",
            "DEFAULT_TRACK_WIDTH_M", "DEFAULT_COHERENCE_DECAY", "RoadProfile", "iso8608_psd", "track_coherence",
@@ -75,13 +76,7 @@ def _class(road_class) -> str:
 
 
 def _positive(value, what: str) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(what, f"must be a number, got {value!r}") from None
-    if not (math.isfinite(x) and x > 0):
-        raise InputError(what, f"must be a finite number > 0, got {value!r}")
-    return x
+    return positive(what, value)
 
 
 def _band(band_cpm) -> tuple[float, float]:
