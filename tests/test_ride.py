@@ -133,3 +133,16 @@ def test_ride_bad_options_end_in_one_line_exit_2_and_nothing_written(cli, tmp_pa
     assert r.code == 2, r
     assert r.err.count("\n") == 1 and r.err.startswith(f"cleatfmu: error: {source}:"), r.err
     assert r.out == "" and not plot.exists()
+
+
+def test_static_set_from_a_compression_test_file(tmp_path):
+    """static=FILE takes the compression test's eq. 18 stiffness (a line of 295.08 kN/m through the points)."""
+    from identification.comfort.ride import _stiffness, check_set_names
+
+    d = np.linspace(0.0, 0.03, 31)
+    path = tmp_path / "compression.csv"
+    path.write_text("deformation_m,force_N\n" + "".join(f"{float(x)!r},{float(295.08e3 * x + 120.0)!r}\n" for x in d))
+    assert check_set_names([f"static={path}", "final"]) == [f"static={path}", "final"]
+    assert _stiffness(f"static={path}") == pytest.approx(295.08e3, rel=1e-9)
+    with pytest.raises(Exception, match="compression test's CSV"):
+        _stiffness(f"static={tmp_path / 'missing.csv'}")

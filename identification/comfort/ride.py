@@ -292,10 +292,17 @@ def check_set_names(names) -> list:
 
 
 def _stiffness(name: str) -> float:
+    """K of ``static=K``: a number in N/m, or a compression test's CSV (its eq. 18 static stiffness)."""
+    value = name.split("=", 1)[1]
     try:
-        k = float(name.split("=", 1)[1])
+        k = float(value)
     except ValueError:
-        raise InputError("--compare", f"{name!r}: static=K needs a stiffness K in N/m, e.g. static=300e3") from None
+        from pathlib import Path
+        if not Path(value).is_file():
+            raise InputError("--compare", f"{name!r}: static=K needs a stiffness K in N/m (e.g. static=300e3) or "
+                                          f"a compression test's CSV file") from None
+        from ..static import static_stiffness_file
+        k = static_stiffness_file(value).k_N_per_m
     if not (math.isfinite(k) and 1e4 <= k <= 1e8):
         raise InputError("--compare", f"{name!r}: a tire stiffness of 1e4 .. 1e8 N/m is expected")
     return k
