@@ -1,21 +1,28 @@
 """Command-line interface: ``cleatfmu <command> ...``.
 
 Every user error (bad file, bad option value) ends with one line on stderr,
-``cleatfmu: error: <file>: <problem>``, and exit status 2; nothing is written.
+``cleatfmu: error: <file>: <problem>``, and exit status 2; nothing is written
+(an output folder created for the run is removed again).  Output folders are
+created as needed.  When stdout is a pipe closed before the output is written
+(``cleatfmu identify --example | head -1``) the command ends silently with
+status 141 (:data:`EXIT_CLOSED_PIPE`).  Every ``--help`` states the options'
+defaults (:class:`identification.cliutil.DefaultsHelpFormatter`).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import io
 import json
+import os
 import sys
 
 from . import __version__
+from .cliutil import OutputFolders, Parser, add_example_option, read_recording_arg
 from .errors import InputError
-from .examples import EXAMPLES
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "EXIT_CLOSED_PIPE"]
 
 #: Modules that add a sub-command: each has ``add_parser(subparsers)``, which
 #: registers the command with ``set_defaults(func=...)``; ``func(args)``
@@ -31,31 +38,27 @@ _COMMAND_MODULE_OF: dict[str, str] = {"rig": ".rig.command", "export": ".export"
 
 
 def _tire_list(values: list[str] | None) -> list[str] | None:
+    """The tires of ``--tire`` (names in any letter case, separated by blanks or commas), or None for all."""
+    from .cliutil import normalize_tire
     from .recording import TIRES
 
     if not values:
         return None
     out: list[str] = []
     for item in values:
-        for name in item.replace(",", " ").split():
+        for name in map(normalize_tire, item.replace(",", " ").split()):
             if name not in TIRES:
                 raise InputError("--tire", f"unknown tire {name!r} (allowed: {', '.join(TIRES)})")
             if name not in out:
                 out.append(name)
+    if not out:
+        raise InputError("--tire", "no tire given (FL, FR, RL or RR)")
     return out
 
 
-def _recording_arg(args):
-    from .examples import example_path
-    from .recording import read_recording
-
-    if args.example is not None:
-        if args.recording is not None:
-            raise InputError("--example", "give either a recording or --example, not both")
-        return read_recording(example_path(args.example))
-    if args.recording is None:
-        raise InputError(None, "no recording given (a REC.csv path, or --example)")
-    return read_recording(args.recording)
+#: The recording of a command (positional REC.csv or ``--example``); kept under this name for the commands
+#: that import it from here.
+_recording_arg = read_recording_arg
 
 
 def format_table(rec, results) -> str:
@@ -126,8 +129,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         The parser.
     """
     with_identify, modules = _parts(command)
-    parser = argparse.ArgumentParser(prog="cleatfmu", description="Tire stiffness and damping from cleat tests, "
-                                     "exported as FMI 2.0 and 3.0 co-simulation FMUs.")
+    parser = Parser(prog="cleatfmu", description="Tire stiffness and damping from cleat tests, "
+                    "exported as FMI 2.0 and 3.0 co-simulation FMUs.")
     parser.add_argument("--version", action="version", version=f"cleatfmu {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     if with_identify:
@@ -144,11 +147,12 @@ def _add_identify(sub) -> None:
     p = sub.add_parser("identify", help="identify tire stiffness k and damping c from a cleat recording",
                        description="Identify k and c of each tire by the cleat-test paper's method "
                                    "(logarithmic decrement for k, exponential fit through the first peak for c).")
-    p.add_argument("recording", nargs="?", help="recording NAME.csv (sidecar NAME.json beside it)")
-    p.add_argument("--example", nargs="?", const="7kmh", metavar="NAME",
-                   help=f"use an embedded recording instead ({', '.join(EXAMPLES)}; default 7kmh)")
+    p.add_argument("recording", nargs="?", metavar="REC.csv",
+                   help="recording NAME.csv (sidecar NAME.json beside it)")
+    add_example_option(p)
     p.add_argument("--tire", action="extend", nargs="+", metavar="TIRE",
-                   help="tire channel(s) to identify (FL FR RL RR; default: all in the recording)")
+                   help="tire channel(s) to identify (FL FR RL RR, any letter case; default: all in the "
+                        "recording)")
     p.add_argument("--method", choices=("paper", "waveform"), default="paper",
                    help="paper: log decrement (k) and exponential fit through the first peak (c); "
                         "waveform: least-squares damped-sinusoid fit of the free decay, with 95%% "
@@ -159,18 +163,101 @@ def _add_identify(sub) -> None:
     p.set_defaults(func=cmd_identify)
 
 
-def main(argv=None) -> int:
-    """Run the CLI; returns the exit status."""
-    parser = build_parser(_command_of(argv))
-    args = parser.parse_args(argv)
+#: Exit status when stdout is closed before the output is written (``cleatfmu ... | head -1``): 128 + SIGPIPE,
+#: what a shell reports for a program that a closed pipe stopped.
+EXIT_CLOSED_PIPE = 141
+
+
+def _parse(parser: argparse.ArgumentParser, argv):
+    """``parser.parse_args(argv)``; positionals that follow options extend the list named by ``trailing``.
+
+    A command whose positionals are a list (``simulate FMU... REC.csv``) sets the default ``trailing`` to
+    that list's name, so that ``simulate FL.fmu --tire FL REC.csv`` reads as ``simulate FL.fmu REC.csv
+    --tire FL``; any other argument left over is an error, as with ``parse_args``.
+    """
+    args, extra = parser.parse_known_args(argv)
+    trailing = getattr(args, "trailing", None)
+    if extra and trailing and not any(item.startswith("-") for item in extra):
+        getattr(args, trailing).extend(extra)
+    elif extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    return args
+
+
+def _flush_stdout() -> None:
+    """Flush stdout, so that a closed pipe shows as BrokenPipeError here rather than at interpreter exit."""
+    if sys.stdout is not None:
+        sys.stdout.flush()
+
+
+def _stdout_is_a_pipe() -> bool:
+    """Whether stdout is a pipe or socket (or cannot be told), i.e. may be what a BrokenPipeError came from."""
+    import stat
+
     try:
-        return args.func(args)
+        mode = os.fstat(sys.stdout.fileno()).st_mode
+    except (AttributeError, OSError, ValueError, io.UnsupportedOperation):
+        return True
+    return stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
+
+
+def _silence_stdout() -> None:
+    """Point stdout at the null device: what is still buffered goes nowhere instead of failing at exit."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError, io.UnsupportedOperation):
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, fd)
+    finally:
+        os.close(devnull)
+
+
+def _run(argv) -> int:
+    parser = build_parser(_command_of(argv))
+    try:
+        args = _parse(parser, argv)
+    except SystemExit:  # --help, --version, a usage error: their output reaches a closed pipe here
+        _flush_stdout()
+        raise
+    try:
+        with OutputFolders() as folders:
+            status = args.func(args)
+            _flush_stdout()
+            if status:
+                folders.remove()
+        return status
     except InputError as exc:
         print(f"cleatfmu: error: {exc.one_line()}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("cleatfmu: interrupted", file=sys.stderr)
         return 130
+
+
+def main(argv=None) -> int:
+    """Run the CLI; returns the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 on success; 2 for a user error (one line on stderr, nothing written); 130 when interrupted;
+        :data:`EXIT_CLOSED_PIPE` (141), silently, when stdout is a pipe closed before the output was
+        written (``cleatfmu identify --example | head -1``).
+    """
+    try:
+        return _run(argv)
+    except BrokenPipeError:
+        if not _stdout_is_a_pipe():
+            raise
+        _silence_stdout()
+        return EXIT_CLOSED_PIPE
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -28,6 +28,7 @@ import json
 import math
 from pathlib import Path, PureWindowsPath
 
+from .cliutil import OutputFolders, check_folder, make_folders
 from .errors import InputError
 from .tire_law import value_problem
 
@@ -48,6 +49,23 @@ def _number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
+def _finite_number(value) -> bool:
+    """Whether `value` is a JSON number that is a finite float (an integer beyond 1e308 is not)."""
+    if not _number(value):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
+def _show(value) -> str:
+    """`value` for a message (an integer too large for a float by its number of digits)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 1e308:
+        return f"an integer of {len(str(abs(value)))} digits"
+    return repr(value)
+
+
 def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
     """Read and check a ``cleatfmu identify --json`` document.
 
@@ -56,14 +74,14 @@ def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
     path : path-like
         The PARAMS.json file.
     tire : str, optional
-        Tire to export; may be omitted when the file holds exactly one.
+        Tire to export (any letter case: ``fl`` names FL); may be omitted when the file holds exactly one.
 
     Returns
     -------
     doc : dict
         The whole document.
     tire : str
-        The chosen tire.
+        The chosen tire, as the file spells it.
     entry : dict
         Its entry (k in N/m, c in N·s/m, ...).
 
@@ -81,6 +99,8 @@ def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
         raise InputError(path, f"cannot read: {exc}") from None
     except json.JSONDecodeError as exc:
         raise InputError(path, f"malformed JSON: {exc.msg} (line {exc.lineno}, column {exc.colno})") from None
+    except ValueError as exc:  # e.g. an integer beyond the int/str conversion limit (4300 digits)
+        raise InputError(path, f"malformed JSON: {exc}") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("tires"), dict) or not doc["tires"]:
         raise InputError(path, 'not the output of "cleatfmu identify --json" (no "tires" object)')
     tires = doc["tires"]
@@ -88,6 +108,8 @@ def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
         if len(tires) != 1:
             raise InputError(path, f"holds tires {', '.join(tires)}; choose one with --tire")
         tire = next(iter(tires))
+    if tire not in tires:  # a tire named in another letter case ("fl" for FL)
+        tire = next((name for name in tires if name.upper() == str(tire).strip().upper()), tire)
     if tire not in tires:
         raise InputError(path, f"no tire {tire!r} (tires in the file: {', '.join(tires)})")
     entry = tires[tire]
@@ -97,19 +119,20 @@ def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
         if key not in entry:
             raise InputError(path, f"tire {tire}: missing {key!r}")
     for key in _NUMBERS:
-        if key in entry and not (_number(entry[key]) and math.isfinite(entry[key])):
-            raise InputError(path, f"tire {tire}: {key} must be a finite number, got {entry[key]!r}")
+        if key in entry and not _finite_number(entry[key]):
+            raise InputError(path, f"tire {tire}: {key} must be a finite number, got {_show(entry[key])}")
     for key in ("k_ci", "c_ci"):  # the waveform method's 95 % intervals
         ci = entry.get(key)
         if ci is not None and not (isinstance(ci, list) and len(ci) == 2
-                                   and all(_number(v) and math.isfinite(v) for v in ci) and ci[0] <= ci[1]):
-            raise InputError(path, f"tire {tire}: {key} must be [low, high], got {ci!r}")
+                                   and all(_finite_number(v) for v in ci) and ci[0] <= ci[1]):
+            shown = "[" + ", ".join(map(_show, ci)) + "]" if isinstance(ci, list) else _show(ci)
+            raise InputError(path, f"tire {tire}: {key} must be [low, high], got {shown}")
     for key, name, unit, strictly in (("k", "stiffness k", "N/m", True), ("c", "damping c", "N*s/m", False)):
         problem = value_problem(name, unit, entry[key], strictly_positive=strictly)
         if problem is not None:
             raise InputError(path, f"tire {tire}: {problem}")
-    if "speed_kmh" in doc and not (_number(doc["speed_kmh"]) and math.isfinite(doc["speed_kmh"])):
-        raise InputError(path, f"speed_kmh must be a finite number, got {doc['speed_kmh']!r}")
+    if "speed_kmh" in doc and not _finite_number(doc["speed_kmh"]):
+        raise InputError(path, f"speed_kmh must be a finite number, got {_show(doc['speed_kmh'])}")
     return doc, tire, entry
 
 
@@ -162,7 +185,8 @@ def export_fmu(params_path, output_path, *, tire: str | None = None, unloaded_ra
     params_path : path-like
         Output of ``cleatfmu identify --json``.
     output_path : path-like
-        The ``.fmu`` to write (atomically: nothing is left behind on failure).
+        The ``.fmu`` to write (atomically: nothing is left behind on failure); missing folders are
+        created (and removed again if the build fails).
     tire : str, optional
         Tire to export (required when the file holds several).
     unloaded_radius_m : float, optional
@@ -197,10 +221,9 @@ def export_fmu(params_path, output_path, *, tire: str | None = None, unloaded_ra
     output_path = Path(output_path)
     if output_path.suffix != ".fmu":
         raise InputError(output_path, "the output file name must end with .fmu")
-    if not output_path.parent.is_dir():
-        raise InputError(output_path, f"directory {str(output_path.parent)!r} does not exist")
     if output_path.is_dir():
         raise InputError(output_path, "is a directory")
+    check_folder(output_path.parent)
     _check_backend(backend, fmi_version, platforms)
     provenance = {"command": "cleatfmu export", "params_file": Path(params_path).name, "tire": tire,
                   "recording": _recording_name(doc), "method": _method(entry), "speed_kmh": doc.get("speed_kmh"),
@@ -211,9 +234,15 @@ def export_fmu(params_path, output_path, *, tire: str | None = None, unloaded_ra
     description = _description(doc, tire, starts, entry, radius_given)
     if backend == "native" and _number(entry.get("mass")) and entry["mass"] > 0:
         starts["hub_z"] = radius - entry["mass"] * _STANDARD_GRAVITY / entry["k"]  # static equilibrium, m
+        if not math.isfinite(starts["hub_z"]):
+            raise InputError(params_path, f"tire {tire}: the static deflection m g / k of mass {entry['mass']!r} kg "
+                                          f"on stiffness {entry['k']!r} N/m is not a finite number")
     try:
-        return build_fmu(FMU_KIND, output_path, start_values=starts, provenance=provenance,
-                         description=description, backend=backend, fmi_version=fmi_version, platforms=platforms)
+        with OutputFolders():  # a folder created for the FMU goes again if the build fails
+            make_folders(output_path.parent)
+            return build_fmu(FMU_KIND, output_path, start_values=starts, provenance=provenance,
+                             description=description, backend=backend, fmi_version=fmi_version,
+                             platforms=platforms)
     except OSError as exc:
         raise InputError(output_path, f"cannot write: {exc.strerror or exc}") from None
 
@@ -250,16 +279,18 @@ def add_parser(subparsers) -> None:
         description="Build an FMI 2.0 or 3.0 co-simulation FMU of the point-contact tire (spring k parallel to "
                     "damper c) whose tunable parameters start at the values identified by 'cleatfmu identify --json'.")
     p.add_argument("params", metavar="PARAMS.json", help="output of 'cleatfmu identify --json'")
-    p.add_argument("--tire", metavar="TIRE", help="tire to export (required when the file holds several)")
-    p.add_argument("-o", "--output", metavar="FMU", help="FMU file to write (default: TIRE.fmu)")
+    p.add_argument("--tire", metavar="TIRE", help="tire to export, any letter case (required when the file "
+                                                  "holds several)")
+    p.add_argument("-o", "--output", metavar="FMU", help="FMU file to write; its folder is created if needed "
+                                                        "(default: TIRE.fmu in the current directory)")
     p.add_argument("--unloaded-radius-m", type=float, default=None, metavar="R0",
                    help=f"unloaded tire radius, m (default {DEFAULT_UNLOADED_RADIUS_M}, an assumption; "
                         f"it only sets the hub height at which the tire touches the road)")
     p.add_argument("--backend", default="native", metavar="{native,pythonfmu}",
-                   help="native: C binaries for Linux, Windows and macOS, no Python needed in the importer "
-                        "(default); pythonfmu: the Python slave (needs Python 3 in the importer)")
+                   help="native: C binaries for Linux, Windows and macOS, no Python needed in the importer; "
+                        "pythonfmu: the Python slave (needs Python 3 in the importer) (default: %(default)s)")
     p.add_argument("--fmi-version", type=int, default=2, metavar="{2,3}",
-                   help="FMI version of a native FMU: 2 (FMI 2.0, default) or 3 (FMI 3.0)")
+                   help="FMI version of a native FMU: 2 (FMI 2.0) or 3 (FMI 3.0) (default: %(default)s)")
     p.add_argument("--platforms", default=None, metavar="P1,P2",
                    help="comma-separated platforms of a native FMU (default: all; FMI 2.0: linux64,win64,darwin64; "
                         "FMI 3.0: x86_64-linux,aarch64-linux,x86_64-windows,x86_64-darwin,aarch64-darwin)")

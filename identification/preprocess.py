@@ -50,6 +50,9 @@ _MIN_SNR = 10.0
 #: Peaks smaller than this many noise RMS (or 1 % of the impact) are not used.
 _PEAK_SNR = 5.0
 _PEAK_FRACTION = 0.01
+#: Largest accepted hub acceleration, m/s² (about 100,000 g): a larger value is no hub acceleration in m/s²
+#: (and would overflow the filter and the fits).
+MAX_ACCEL_M_S2 = 1e6
 #: Search window for a rear impact starts this long before the expected L / v
 #: (the speed is known to about 1 %, i.e. ±15 ms at 7 km/h).
 _REAR_TOLERANCE_S = 0.1
@@ -146,7 +149,14 @@ def lowpass_design(*, sample_rate_hz: float, cutoff_hz: float = DEFAULT_CUTOFF_H
     if cutoff_hz >= sample_rate_hz / 2 * (1 - 1e-9):
         raise InputError(source, f"low-pass cut-off {cutoff_hz:g} Hz is not below the Nyquist frequency "
                                  f"{sample_rate_hz / 2:g} Hz (sampling rate {sample_rate_hz:g} Hz)")
-    return _butter_sos(order, float(cutoff_hz), float(sample_rate_hz))
+    try:
+        design = _butter_sos(order, float(cutoff_hz), float(sample_rate_hz))
+    except (np.linalg.LinAlgError, ValueError, ZeroDivisionError):
+        design = None
+    if design is None or not (np.all(np.isfinite(design[0])) and np.all(np.isfinite(design[1]))):
+        raise InputError(source, f"low-pass cut-off {cutoff_hz:g} Hz is too low for a filter at the sampling rate "
+                                 f"{sample_rate_hz:g} Hz")
+    return design
 
 
 @functools.lru_cache(maxsize=64)
@@ -296,10 +306,15 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
             raise InputError(src, f"tire {tire} is not in the recording (channels: {', '.join(rec.tires)})")
     fs, t = rec.sample_rate_hz, rec.time_s
     dt = 1.0 / fs
+    lowpass_design(sample_rate_hz=fs, cutoff_hz=cutoff_hz, source=src)  # check the cut-off before any use
     guard = filter_guard_s(cutoff_hz)
     # Filter every channel: front channels are needed for a rear tire's timing.
     filt = {}
     for name in rec.tires:
+        peak = float(np.max(np.abs(rec.accel_m_s2[name])))
+        if peak > MAX_ACCEL_M_S2:
+            raise InputError(src, f"channel {name}: acceleration {peak:.3g} m/s^2 is beyond {MAX_ACCEL_M_S2:g} m/s^2 "
+                                  f"(about 100000 g): not a hub acceleration in m/s^2")
         if name in tires:
             check_clipping(rec.accel_m_s2[name], source=src, tire=name)
         filt[name] = lowpass(rec.accel_m_s2[name], sample_rate_hz=fs, cutoff_hz=cutoff_hz, source=src)

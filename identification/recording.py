@@ -223,6 +223,8 @@ def _is_number(value: Any) -> bool:
 def _positive(path: Path, key: str, value: Any) -> float:
     if not _is_number(value):
         raise InputError(path, f"{key} must be a number, got {json.dumps(value)}")
+    if isinstance(value, int) and abs(value) > 1e308:  # beyond float: math.isfinite would overflow
+        raise InputError(path, f"{key} must be a finite number > 0, got an integer of {len(str(abs(value)))} digits")
     if not math.isfinite(value) or value <= 0:
         raise InputError(path, f"{key} must be a finite number > 0, got {value}")
     return float(value)
@@ -235,6 +237,8 @@ def _read_sidecar(path: Path) -> dict[str, Any]:
         raise InputError(path, "not a UTF-8 text file") from None
     except json.JSONDecodeError as exc:
         raise InputError(path, f"malformed JSON: {exc.msg} (line {exc.lineno}, column {exc.colno})") from None
+    except ValueError as exc:  # e.g. an integer beyond the int/str conversion limit (4300 digits)
+        raise InputError(path, f"malformed JSON: {exc}") from None
     if not isinstance(meta, dict):
         raise InputError(path, "the sidecar must be a JSON object")
     fmt = meta.get("format")
@@ -246,6 +250,8 @@ def _read_sidecar(path: Path) -> dict[str, Any]:
         if key not in meta:
             raise InputError(path, f"missing key '{key}'")
         meta[key] = _positive(path, key, meta[key])
+        if meta[key] / 3.6 == 0 or meta[key] / 1e3 == 0:  # would underflow to 0 in SI units (m/s, m)
+            raise InputError(path, f"{key} must be a finite number > 0, got {meta[key]!r} (too small)")
     loads = meta.get("wheel_load_kN")
     if loads is None:
         raise InputError(path, "missing key 'wheel_load_kN'")

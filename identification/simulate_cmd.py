@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .cliutil import check_output, choose_tire
+from .cliutil import add_example_option, check_output, choose_tire, read_recording_arg
 from .errors import InputError
 from .preprocess import DEFAULT_CUTOFF_HZ
 
@@ -40,7 +40,7 @@ _KINDS = {"corners": "four independent corners", "sides": "one half-tractor per 
           "pivot": "rigid tractor with a pivoting front axle"}
 
 
-def _tractor_text(sim) -> str:
+def _tractor_text(sim, verbose: bool = False) -> str:
     from .diagnose.tractor import TIRE_EFFECTS
     from .tractor_cosim import UNEXPLAINED_RATIO
 
@@ -71,7 +71,8 @@ def _tractor_text(sim) -> str:
                      f"{UNEXPLAINED_RATIO:g}x the noise")
     else:
         lines.append("  the model explains every channel to within the noise")
-    lines.append(f"  time: {sim.seconds:.1f} s")
+    if verbose:
+        lines.append(f"  time: {sim.seconds:.1f} s")
     return "\n".join(lines)
 
 
@@ -92,15 +93,25 @@ def _plot_tractor(sim):
 
 
 def _save_plot(fig, path) -> None:
-    from .plots import save_png
-    try:
-        save_png(fig, path)
-    except OSError as exc:
-        raise InputError(path, f"cannot write: {exc.strerror or exc}") from None
+    from .plots import png_bytes
+    from .cliutil import write_files
+
+    write_files({path: png_bytes(fig)})
+
+
+def _inputs(args) -> tuple[list[str], str | None]:
+    """The FMU paths and the recording path of the command line (None with ``--example``)."""
+    paths = list(args.fmu) + ([args.recording] if args.recording is not None else [])
+    if args.example is not None:
+        if paths and str(paths[-1]).lower().endswith(".csv"):
+            raise InputError("--example", "give either a recording or --example, not both")
+        return paths, None
+    if len(paths) < 2:
+        raise InputError(None, "give the FMU(s) and then the recording REC.csv (or --example NAME)")
+    return paths[:-1], paths[-1]
 
 
 def _run_tractor(args) -> int:
-    from .recording import read_recording
     from .simulate_inputs import tractor_fmu_paths
     from .tractor_cosim import simulate_tractor
 
@@ -112,27 +123,30 @@ def _run_tractor(args) -> int:
     if args.body is None:
         raise InputError("--body", "the whole-tractor form (four FMUs or a directory) needs the body and the "
                                    "arrivals: give --body DIAG.json, a 'cleatfmu diagnose REC.csv --json' document")
-    rec = read_recording(args.recording)
+    rec = read_recording_arg(args)
+    check_output(args.plot, ".png", "plot")
     sim = simulate_tractor(paths, rec, args.body, cutoff_hz=args.cutoff_hz, step_s=args.max_step_s)
     if args.plot is not None:
         _save_plot(_plot_tractor(sim), args.plot)
-    print(json.dumps(sim.to_json(), indent=2) if args.json else _tractor_text(sim))
+    print(json.dumps(sim.to_json(), indent=2) if args.json else _tractor_text(sim, args.verbose))
     return 0
 
 
 def run(args) -> int:
-    from .recording import read_recording
+    """Run ``cleatfmu simulate``; returns 0 (user errors raise InputError)."""
     from .validation import DEFAULT_MAX_STEP_S, simulate_recording
 
-    check_output(args.plot, ".png", "plot")
+    check_output(args.plot, ".png", "plot", create=False)
     if args.max_step_s is not None and not args.max_step_s > 0:
         raise InputError("--max-step-s", f"must be > 0, got {args.max_step_s}")
+    args.fmu, args.recording = _inputs(args)
     if len(args.fmu) > 1 or Path(args.fmu[0]).is_dir():
         return _run_tractor(args)
     if args.body is not None:
         raise InputError("--body", "applies to the whole-tractor form (four FMUs or a directory), not to one FMU")
-    rec = read_recording(args.recording)
+    rec = read_recording_arg(args)
     tire = choose_tire(rec, args.tire)
+    check_output(args.plot, ".png", "plot")
     step = args.max_step_s if args.max_step_s is not None else DEFAULT_MAX_STEP_S
     cmp = simulate_recording(args.fmu[0], rec, tire, cutoff_hz=args.cutoff_hz, max_step_s=step,
                              method=args.method or "paper")
@@ -144,6 +158,7 @@ def run(args) -> int:
 
 
 def add_parser(subparsers) -> None:
+    """Register ``cleatfmu simulate``."""
     p = subparsers.add_parser(
         "simulate", help="co-simulate a tire FMU (or all four under the body) over a recording's cleat and compare "
                          "with the measurement",
@@ -153,21 +168,26 @@ def add_parser(subparsers) -> None:
                     "Four FMUs (FL FR RL RR, or a directory holding *_FL.fmu .. *_RR.fmu as 'diagnose --fmu-dir' "
                     "writes them) with --body DIAG.json: run them under the body of a whole-tractor diagnosis "
                     "('diagnose --json') and report, per channel, the NRMSE against the measurement, the noise-only "
-                    "NRMSE and their ratio.")
+                    "NRMSE and their ratio.  The recording is the last path, or an embedded one with --example.")
     p.add_argument("fmu", metavar="FMU", nargs="+",
                    help="one tire FMU, four (FL FR RL RR: matched by a _FL.fmu .. _RR.fmu suffix, else in that "
                         "order), or one directory holding them")
-    p.add_argument("recording", metavar="REC.csv")
-    p.add_argument("--tire", metavar="TIRE", help="one FMU: channel to compare (required when the recording has "
-                                                  "several)")
+    p.add_argument("recording", metavar="REC.csv", nargs="?",
+                   help="the recording (the last path; omit it with --example)")
+    add_example_option(p, bare=False)
+    p.add_argument("--tire", metavar="TIRE", help="one FMU: channel to compare, any letter case (required when "
+                                                  "the recording has several)")
     p.add_argument("--body", metavar="DIAG.json",
                    help="four FMUs: the body and arrivals, a 'cleatfmu diagnose REC.csv --json' document")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.add_argument("--plot", metavar="OUT.png", help="write measured vs simulated acceleration (one FMU: with "
-                                                     "decay curves; four: every channel)")
+                                                     "decay curves; four: every channel); the folder is created "
+                                                     "if needed")
     p.add_argument("--method", choices=("paper", "waveform"), default=None,
                    help="one FMU: method to re-identify k and c from the simulated acceleration (default: paper)")
-    p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ, help="low-pass cut-off, Hz")
+    p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ,
+                   help="low-pass cut-off, Hz (default %(default)g)")
     p.add_argument("--max-step-s", type=float, default=None, metavar="H",
                    help="largest co-simulation step, s (default 2.5e-4 for one FMU, 1e-3 for four, as diagnose)")
-    p.set_defaults(func=run)
+    p.add_argument("-v", "--verbose", action="store_true", help="four FMUs: also print the time taken")
+    p.set_defaults(func=run, trailing="fmu")

@@ -193,6 +193,8 @@ def value_problem(name, unit, value, *, strictly_positive):
         return f"{name} must be a number in {unit}, got {value!r}"
     try:
         value = float(value)
+    except OverflowError:  # an integer beyond the float range
+        return f"{name} must be finite, got an integer of {len(str(abs(value)))} digits"
     except (TypeError, ValueError):
         return f"{name} must be a number in {unit}, got {value!r}"
     if not math.isfinite(value):

@@ -150,7 +150,10 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None) -> Wavefo
         raise InputError(source, f"channel {sig.tire}: free-decay window too short for a waveform fit")
     sigma0 = -paper.decay_rate
     wd0 = 2 * math.pi / paper.T
-    params, cov, r2, inflation = fit_free_decay(t[sel], sig.raw_m_s2[sel], sigma0=sigma0, omega_d0=wd0)
+    try:
+        params, cov, r2, inflation = fit_free_decay(t[sel], sig.raw_m_s2[sel], sigma0=sigma0, omega_d0=wd0)
+    except np.linalg.LinAlgError:  # e.g. accelerations so large that the sums of squares overflow
+        raise InputError(source, f"channel {sig.tire}: the waveform fit did not converge") from None
     sigma, wd = float(params[0]), abs(float(params[1]))
     if not (sigma > 0 and wd > 0 and np.all(np.isfinite(cov))):
         raise InputError(source, f"channel {sig.tire}: the waveform fit found no decaying oscillation "
@@ -163,6 +166,9 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None) -> Wavefo
     q = float(stats.t.ppf(0.975, max(1, sel.sum() - params.size)))
     hk = q * math.sqrt(max(0.0, float(grad_k @ sub @ grad_k)))
     hc = q * math.sqrt(max(0.0, float(grad_c @ sub @ grad_c)))
+    if not all(math.isfinite(v) for v in (k, c, hk, hc, r2)):
+        raise InputError(source, f"channel {sig.tire}: the waveform fit gave no finite stiffness and damping "
+                                 f"(k {k:.3g} N/m, c {c:.3g} N*s/m)")
     period = 2 * math.pi / wd
     return WaveformResult(
         tire=sig.tire, k=k, c=c, T=period, delta=sigma * period, zeta=sigma / math.sqrt(wn2),

@@ -152,7 +152,7 @@ def test_bad_params_file_exits_2_with_one_line_naming_the_file(tmp_path, capsys,
     (["--unloaded-radius-m", "0"], "--unloaded-radius-m", "must be > 0"),
     (["--unloaded-radius-m", "nan"], "--unloaded-radius-m", "must be finite"),
     (["-o", "FL.zip"], "FL.zip", "must end with .fmu"),
-    (["-o", "missing_dir/FL.fmu"], "missing_dir", "does not exist"),
+    (["-o", "params.json/FL.fmu"], "params.json", "is not a directory"),  # a missing folder is created
     (["--platforms", "linux64,amiga"], "--platforms", "unknown platform 'amiga'"),
     (["--platforms", ","], "--platforms", "no platform given"),
     (["--fmi-version", "1"], "--fmi-version", "FMI 1 is not supported"),

@@ -1,5 +1,7 @@
 """Killed and interrupted runs: no worker outlives its parent, Ctrl-C stops a report at once, a re-run succeeds."""
 
+import os
+import signal
 import subprocess
 import sys
 import time
@@ -82,3 +84,21 @@ def test_sigkill_to_the_parent_leaves_no_worker_alive_and_a_rerun_succeeds(day, 
     staging = [p for p in out.rglob("*") if p.name.startswith(".") or p.suffix in (".tmp", ".part")]
     assert staging == []
 
+
+def test_sigint_stops_a_report_within_2_s_with_exit_130_and_no_traceback(day, tmp_path):
+    proc = _start_report(day, tmp_path / "out")
+    workers = _wait_for_workers(proc)
+    t0 = time.monotonic()
+    os.killpg(os.getpgid(proc.pid), signal.SIGINT) if os.getpgid(proc.pid) != os.getpgrp() else \
+        proc.send_signal(signal.SIGINT)
+    try:
+        out, err = proc.communicate(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        pytest.fail("SIGINT did not stop the report within 10 s")
+    elapsed = time.monotonic() - t0
+    assert proc.returncode == 130, (proc.returncode, err)
+    assert elapsed <= 2.0, elapsed
+    assert "Traceback" not in err and err.strip().count("\n") == 0, err
+    time.sleep(0.2)
+    assert not [w for w in workers if _alive(w)]

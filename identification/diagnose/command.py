@@ -5,7 +5,8 @@ from __future__ import annotations
 import json
 import os
 
-from ..cliutil import check_output, choose_tire
+from ..cliutil import (add_example_option, check_folder, check_output, choose_tire, read_recording_arg,
+                       write_files)
 from ..errors import InputError
 from ..preprocess import DEFAULT_CUTOFF_HZ
 
@@ -81,7 +82,7 @@ def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=
     return diag, gain
 
 
-def _tractor_text(diag, gain) -> str:
+def _tractor_text(diag, gain, verbose: bool = False) -> str:
     doc = diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
     body = doc["body"]
     lines = [f"{diag.problem.rec.source}: effects the four-corner model misses: "
@@ -103,51 +104,59 @@ def _tractor_text(diag, gain) -> str:
                      f"c {t['c'] / 1e3:.3f} kN s/m ({t['c_ci'][0] / 1e3:.3f}-{t['c_ci'][1] / 1e3:.3f})  "
                      f"NRMSE {t['nrmse_before']:.1%} -> {t['nrmse_after']:.1%} (noise {t['noise_nrmse']:.1%}): {flag}")
     lines.append(f"  95 % intervals: {doc['intervals']}")
-    lines.append(f"  FMU co-simulation (fmpy, one FMU per tire) agrees with the fitting model to {gain.agreement:.1e}; "
-                 f"{diag.seconds:.1f} s diagnosis, {gain.seconds:.1f} s FMU gain check")
+    lines.append(f"  FMU co-simulation (fmpy, one FMU per tire) agrees with the fitting model to {gain.agreement:.1e}"
+                 + (f"; {diag.seconds:.1f} s diagnosis, {gain.seconds:.1f} s FMU gain check" if verbose else ""))
     return "\n".join(lines)
 
 
 def run(args) -> int:
-    from ..recording import read_recording
+    """Run ``cleatfmu diagnose``; returns 0 (user errors raise InputError).
 
-    rec = read_recording(args.recording)
+    Every output file (``--fmu``, ``--fmu-dir``, ``--plot``) is written at the end, all together or none.
+    """
+    import tempfile
+    from pathlib import Path
+
+    if args.workers < 1:
+        raise InputError("--workers", f"at least 1, got {args.workers}")
+    check_output(args.plot, ".png", "plot", create=False)
+    check_output(args.fmu, ".fmu", "FMU", create=False)
+    if args.fmu_dir is not None:
+        check_folder(args.fmu_dir)
+    rec = read_recording_arg(args)
     tire = choose_tire(rec, args.tire) if args.tire is not None or len(rec.tires) == 1 else None
-    check_output(args.plot, ".png", "plot")
-    check_output(args.fmu, ".fmu", "FMU")
     if args.fmu is not None and tire is None:
         raise InputError("--fmu", "names one tire's FMU: use it with --tire, or --fmu-dir for every tire")
-    if args.fmu_dir is not None and not os.path.isdir(args.fmu_dir):
-        raise InputError(args.fmu_dir, "--fmu-dir: no such directory")
+    keep_fmus = args.fmu is not None or args.fmu_dir is not None
     tick, bar = _progress(f"diagnose {tire or 'tractor'}")
-    try:
-        if args.fmu is not None:
-            import tempfile
-            from .._files import publish_files
-            with tempfile.TemporaryDirectory(prefix="cleatfmu_fmus_") as tmp:
-                diag, gain = run_tractor_diagnosis(rec, cutoff_hz=args.cutoff_hz, fmu_dir=tmp,
-                                                   workers=args.workers, progress=tick)
-                own = next(p for p in gain.fmu_paths if p.stem.endswith(f"_{tire}"))
-                publish_files({args.fmu: own})
-        else:
-            diag, gain = run_tractor_diagnosis(rec, cutoff_hz=args.cutoff_hz, fmu_dir=args.fmu_dir,
+    with tempfile.TemporaryDirectory(prefix="cleatfmu_fmus_") as tmp:
+        try:
+            diag, gain = run_tractor_diagnosis(rec, cutoff_hz=args.cutoff_hz, fmu_dir=tmp if keep_fmus else None,
                                                workers=args.workers, progress=tick)
-    finally:
-        bar.close()
+        finally:
+            bar.close()
+        files = {}
+        if args.fmu is not None:
+            own = next(p for p in gain.fmu_paths if p.stem.endswith(f"_{tire}"))
+            files[Path(args.fmu)] = own.read_bytes()
+        if args.fmu_dir is not None:
+            files.update({Path(args.fmu_dir) / p.name: p.read_bytes() for p in gain.fmu_paths})
     if args.plot is not None:
-        from ..plots import plot_tractor_diagnosis, save_png
-        save_png(plot_tractor_diagnosis(diag, nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after),
-                 args.plot)
+        from ..plots import plot_tractor_diagnosis, png_bytes
+        files[Path(args.plot)] = png_bytes(plot_tractor_diagnosis(diag, nrmse_before=gain.nrmse_before,
+                                                                  nrmse_after=gain.nrmse_after))
+    write_files(files)
     if args.json:
         doc = diag.tire_json(tire, nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after) if tire else \
             diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
         print(json.dumps(doc, indent=2))
     else:
-        print(_tractor_text(diag, gain))
+        print(_tractor_text(diag, gain, args.verbose))
     return 0
 
 
 def add_parser(subparsers) -> None:
+    """Register ``cleatfmu diagnose``."""
     p = subparsers.add_parser(
         "diagnose", help="diagnose the whole tractor: every tire jointly under one body, the effects the "
                          "point-contact model misses, the extended model, the gain",
@@ -155,14 +164,20 @@ def add_parser(subparsers) -> None:
                     "rigid or pivoting front axle) and the tire-side extensions (enveloping, lift_off, "
                     "nonlinear_stiffness, friction_damping, periodic_disturbance), named by forward selection (BIC "
                     "plus physical evidence); say what is left unexplained; measure the gain by co-simulating one "
-                    "extended tire FMU per wheel with fmpy.")
-    p.add_argument("recording", metavar="REC.csv")
-    p.add_argument("--tire", metavar="TIRE", help="print one tire's result (per-tire JSON shape), from the joint fit")
+                    "extended tire FMU per wheel with fmpy.  Output folders are created if needed; the output "
+                    "files are written together at the end, or none of them.")
+    p.add_argument("recording", metavar="REC.csv", nargs="?", help="the recording (or --example NAME)")
+    add_example_option(p)
+    p.add_argument("--tire", metavar="TIRE", help="print one tire's result (per-tire JSON shape), from the joint "
+                                                  "fit; any letter case")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.add_argument("--fmu", metavar="OUT.fmu", help="with --tire: write that tire's extended FMU")
-    p.add_argument("--fmu-dir", metavar="DIR", help="write one extended tire FMU per tire into DIR")
+    p.add_argument("--fmu-dir", metavar="DIR", help="write one extended tire FMU per tire into DIR "
+                                                    "(REC_FL.fmu .. REC_RR.fmu)")
     p.add_argument("--plot", metavar="OUT.png", help="write measured vs the corners and the final model, per channel")
-    p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ, help="low-pass cut-off, Hz")
+    p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ,
+                   help="low-pass cut-off, Hz (default %(default)g)")
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
-                   help="processes fitting candidate models in parallel (default: up to 2)")
+                   help="processes fitting candidate models in parallel (default: 2, or 1 on a one-core machine)")
+    p.add_argument("-v", "--verbose", action="store_true", help="also print the time taken (text output)")
     p.set_defaults(func=run)

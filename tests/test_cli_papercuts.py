@@ -1,0 +1,326 @@
+"""Command-line papercuts: --example wherever a recording is read, output folders created as needed, ``rig``
+without -o, a closed pipe, tire names in any letter case, defaults in every --help, -v for timings.
+
+The heavy computations (diagnosis, co-simulation) are replaced by stand-ins where a test is about the
+command line around them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from identification import cli
+from identification.cliutil import OutputFolders, check_output, choose_tire, make_folders
+from identification.errors import InputError
+
+TIRES = ("FL", "FR", "RL", "RR")
+
+
+def _one_line_error(res, *needles):
+    assert res.code == 2 and res.out == "", (res.code, res.out, res.err)
+    assert len(res.err.strip().splitlines()) == 1 and res.err.startswith("cleatfmu: error: "), res.err
+    for needle in needles:
+        assert needle in res.err, res.err
+
+
+def _subparsers(parser=None) -> dict:
+    parser = parser or cli.build_parser()
+    (action,) = [a for a in parser._actions if a.dest == "command"]
+    return dict(action.choices)
+
+
+# ----------------------------------------------------------------------------- 1. --example
+
+def test_every_command_reading_a_recording_takes_example():
+    for name, sub in _subparsers().items():
+        positionals = [a for a in sub._actions if not a.option_strings and a.metavar == "REC.csv"]
+        if positionals:
+            assert positionals[0].nargs == "?", name
+            assert any("--example" in a.option_strings for a in sub._actions), name
+
+
+@pytest.mark.parametrize("command", [("identify",), ("diagnose",), ("simulate", "FL.fmu"), ("ride",)])
+def test_recording_or_example_exactly_one(cli, tmp_path, command):
+    neither = cli(*command) if command[0] != "simulate" else cli(*command, "--tire", "FL")
+    _one_line_error(neither, "recording")
+    both = cli(*command, tmp_path / "rec.csv", "--example", "7kmh")
+    _one_line_error(both, "--example: give either a recording or --example, not both")
+
+
+@pytest.mark.parametrize("command", [("diagnose",), ("simulate", "FL.fmu")])
+def test_example_is_read(cli, command):
+    """The embedded recording is read: its channels are what --tire is checked against (before any work)."""
+    _one_line_error(cli(*command, "--example", "10kmh", "--tire", "xx"), "testday_10kmh.csv",
+                    "tire XX is not in the recording (channels: FL, FR, RL, RR)")
+    _one_line_error(cli(*command, "--example", "20kmh"), "--example: unknown example '20kmh'")
+
+
+def test_simulate_recording_is_the_last_path_even_after_options(cli, tmp_path):
+    _one_line_error(cli("simulate", "FL.fmu", "--tire", "FL", tmp_path / "late.csv"), "late.csv: no such file")
+    _one_line_error(cli("simulate", "FL.fmu", "--tire", "FL"), "give the FMU(s) and then the recording")
+
+
+def test_identify_example_with_lower_case_tires(cli):
+    res = cli("identify", "--example", "7kmh", "--tire", "rr,fl", "--json")
+    assert res.code == 0, res.err
+    assert list(json.loads(res.out)["tires"]) == ["RR", "FL"]
+
+
+# ----------------------------------------------------------------------------- 2. output folders
+
+def test_check_output_creates_the_folder_and_a_failed_block_removes_it(tmp_path):
+    target = tmp_path / "a" / "b" / "x.png"
+    with pytest.raises(RuntimeError):
+        with OutputFolders():
+            check_output(target, ".png", "plot")
+            assert target.parent.is_dir()
+            raise RuntimeError("the run fails")
+    assert list(tmp_path.iterdir()) == []
+    with OutputFolders():
+        check_output(target, ".png", "plot")
+    assert target.parent.is_dir()
+    check_output(tmp_path / "c" / "y.png", ".png", "plot", create=False)
+    assert not (tmp_path / "c").exists()
+    (tmp_path / "file").write_text("")
+    for path, needle in ((tmp_path / "file" / "x.png", "is not a directory"), (tmp_path / "x.jpg", "must end with"),
+                         (tmp_path / "a", "must end with")):
+        with pytest.raises(InputError, match=needle):
+            check_output(path, ".png", "plot")
+    (tmp_path / "d.png").mkdir()
+    with pytest.raises(InputError, match="is a directory"):
+        check_output(tmp_path / "d.png", ".png", "plot")
+
+
+def test_inner_block_hands_its_folders_to_the_outer_one(tmp_path):
+    with pytest.raises(RuntimeError):
+        with OutputFolders():
+            with OutputFolders():
+                assert make_folders(tmp_path / "p" / "q") == [tmp_path / "p", tmp_path / "p" / "q"]
+            raise RuntimeError
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_rig_output_folder_created(cli, tmp_path):
+    res = cli("rig", "--param", "duration_s=2", "-o", tmp_path / "runs" / "day1" / "a")
+    assert res.code == 0, res.err
+    assert sorted(p.name for p in (tmp_path / "runs" / "day1").iterdir()) == ["a.csv", "a.json", "a.truth.json"]
+
+
+def test_rig_output_under_a_file_refused_before_the_run(cli, tmp_path, monkeypatch):
+    from identification.rig import generate
+
+    monkeypatch.setattr(generate, "run_rig", None)   # never reached
+    (tmp_path / "afile").write_text("")
+    _one_line_error(cli("rig", "-o", tmp_path / "afile" / "sub" / "a"), "afile: is not a directory")
+    assert [p.name for p in tmp_path.iterdir()] == ["afile"]
+
+
+def test_rig_failing_after_the_folder_was_made_leaves_nothing(cli, tmp_path, monkeypatch):
+    from identification.rig import generate
+
+    def refuse(*args, **kwargs):
+        raise InputError("rig", "cannot write (stand-in)")
+    monkeypatch.setattr(generate, "write_run", refuse)
+    _one_line_error(cli("rig", "--param", "duration_s=2", "-o", tmp_path / "runs" / "a"), "stand-in")
+    assert list(tmp_path.iterdir()) == []
+
+
+def _params(tmp_path) -> Path:
+    path = tmp_path / "params.json"
+    path.write_text(json.dumps({"recording": "r.csv", "speed_kmh": 7.0,
+                                "tires": {"FL": {"k": 4.1e5, "c": 2.3e3}, "FR": {"k": 4.2e5, "c": 2.4e3}}}))
+    return path
+
+
+def test_export_output_folder_created_and_tire_in_any_case(cli, tmp_path):
+    out = tmp_path / "new" / "dir" / "x.fmu"
+    res = cli("export", _params(tmp_path), "--tire", "fr", "--backend", "pythonfmu", "-o", out)
+    assert res.code == 0, res.err
+    assert "tire FR" in res.out and out.is_file()
+
+
+def test_export_failing_build_removes_the_folder_it_made(cli, tmp_path, monkeypatch):
+    import build_scripts
+
+    def fail(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(build_scripts, "build_fmu", fail)
+    res = cli("export", _params(tmp_path), "--tire", "FL", "--backend", "pythonfmu", "-o", tmp_path / "new" / "x.fmu")
+    _one_line_error(res, "cannot write: No space left on device")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["params.json"]
+
+
+def test_ride_plot_folder_removed_when_the_run_fails(cli, tmp_path):
+    """``ride`` creates the --plot folder when it checks it; the run then fails: the folder goes again."""
+    _one_line_error(cli("ride", tmp_path / "missing.csv", "--plot", tmp_path / "new" / "ride.png"),
+                    "missing.csv: no such file")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture
+def fake_simulation(monkeypatch):
+    """``simulate`` with a stand-in co-simulation and plot (the command line around them is real)."""
+    from identification import plots, validation
+
+    def simulate_recording(fmu, rec, tire, **kwargs):
+        if str(fmu).endswith("bad.fmu"):
+            raise InputError(fmu, "not an FMU (stand-in)")
+        return SimpleNamespace(to_json=lambda: {"tire": tire, "fmu": str(fmu)})
+    monkeypatch.setattr(validation, "simulate_recording", simulate_recording)
+    monkeypatch.setattr(plots, "plot_comparison", lambda cmp: "figure")
+    monkeypatch.setattr(plots, "png_bytes", lambda fig, dpi=110: b"\x89PNG stand-in")
+
+
+def test_simulate_plot_folder_created(cli, tmp_path, fake_simulation):
+    plot = tmp_path / "some" / "new" / "x.png"
+    res = cli("simulate", "FL.fmu", "--example", "7kmh", "--tire", "rl", "--json", "--plot", plot)
+    assert res.code == 0, res.err
+    assert json.loads(res.out)["tire"] == "RL" and plot.read_bytes() == b"\x89PNG stand-in"
+    _one_line_error(cli("simulate", "bad.fmu", "--example", "7kmh", "--tire", "FL", "--plot",
+                        tmp_path / "other" / "x.png"), "stand-in")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["some"]
+
+
+@pytest.fixture
+def fake_diagnosis(monkeypatch):
+    """``diagnose`` with a stand-in diagnosis writing four FMU files (the command line around it is real)."""
+    from identification import plots
+    from identification.diagnose import command
+
+    calls = []
+
+    def run_tractor_diagnosis(rec, *, cutoff_hz, fmu_dir=None, workers=1, progress=None):
+        calls.append(fmu_dir)
+        paths = []
+        if fmu_dir is not None:
+            for tire in TIRES:
+                paths.append(Path(fmu_dir) / f"{Path(rec.source).stem}_{tire}.fmu")
+                paths[-1].write_bytes(tire.encode())
+        if cutoff_hz == 33.0:
+            raise InputError(rec.source, "no fit (stand-in)")
+        doc = {"body": {"pitch_index": None, "roll_index": None, "front_axle": "rigid",
+                        "speed_m_s": {"sidecar": 7 / 3.6, "from_delay": None}},
+               "tires": {}, "intervals": "stand-in"}
+        diag = SimpleNamespace(problem=SimpleNamespace(rec=rec), effects=[], evidence={}, seconds=4.25,
+                               to_json=lambda **kw: doc, tire_json=lambda tire, **kw: {"tire": tire})
+        gain = SimpleNamespace(nrmse_before={}, nrmse_after={}, agreement=1e-9, fmu_paths=paths, seconds=1.5)
+        return diag, gain
+    monkeypatch.setattr(command, "run_tractor_diagnosis", run_tractor_diagnosis)
+    monkeypatch.setattr(plots, "plot_tractor_diagnosis", lambda diag, **kw: "figure")
+    monkeypatch.setattr(plots, "png_bytes", lambda fig, dpi=110: b"\x89PNG stand-in")
+    return calls
+
+
+def test_diagnose_output_folders_created_all_outputs_together(cli, tmp_path, fake_diagnosis):
+    new = tmp_path / "new"
+    res = cli("diagnose", "--example", "--tire", "rr", "--json", "--fmu", new / "one" / "RR_ext.fmu",
+              "--fmu-dir", new / "all", "--plot", new / "plots" / "d.png")
+    assert res.code == 0, res.err
+    assert json.loads(res.out) == {"tire": "RR"}
+    assert (new / "one" / "RR_ext.fmu").read_bytes() == b"RR"
+    assert sorted(p.name for p in (new / "all").iterdir()) == [f"testday_7kmh_{t}.fmu" for t in TIRES]
+    assert (new / "plots" / "d.png").read_bytes() == b"\x89PNG stand-in"
+
+
+def test_diagnose_failure_writes_nothing(cli, tmp_path, fake_diagnosis):
+    res = cli("diagnose", "--example", "--fmu-dir", tmp_path / "fmus", "--plot", tmp_path / "p" / "d.png",
+              "--cutoff-hz", "33")
+    _one_line_error(res, "no fit (stand-in)")
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "afile").write_text("")
+    _one_line_error(cli("diagnose", "--example", "--fmu-dir", tmp_path / "afile" / "fmus"), "is not a directory")
+    assert len(fake_diagnosis) == 1   # the bad --fmu-dir is refused before any work
+
+
+# ----------------------------------------------------------------------------- 3. rig without -o
+
+def test_rig_without_output_writes_a_generated_name_in_the_current_directory(cli, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    first = cli("rig", "--param", "duration_s=2")
+    assert first.code == 0, first.err
+    assert first.out.split() == [f"rig_baseline_7kmh_seed0{s}" for s in (".csv", ".json", ".truth.json")]
+    again = cli("rig", "--param", "duration_s=2")   # never overwrites
+    assert again.out.split() == [f"rig_baseline_7kmh_seed0_2{s}" for s in (".csv", ".json", ".truth.json")]
+    (tmp_path / "runs").mkdir()
+    into = cli("rig", "--param", "duration_s=2", "--seed", "4", "--speed", "10", "-o", "runs")
+    assert into.out.split()[0] == str(Path("runs") / "rig_baseline_10kmh_seed4.csv")
+    assert "rig_EFFECTS_SPEEDkmh_seedSEED" in _subparsers()["rig"].format_help()
+
+
+def test_rig_tire_names_in_any_case(cli, tmp_path):
+    _one_line_error(cli("rig", "--param", "tire.fl.k_N_m=-5", "-o", tmp_path / "x"), "tire.FL.k_N_m must be > 0")
+    assert list(tmp_path.iterdir()) == []
+
+
+# ----------------------------------------------------------------------------- 4. closed pipe
+
+def _closed_pipe(*args) -> tuple[int, str]:
+    """Run ``python -m identification.cli ARGS`` with stdout a pipe whose reader is gone before it writes."""
+    proc = subprocess.Popen([sys.executable, "-m", "identification.cli", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    proc.stdout.close()
+    err = proc.stderr.read()
+    return proc.wait(timeout=120), err
+
+
+def test_closed_pipe_is_silent():
+    code, err = _closed_pipe("identify", "--example", "7kmh")
+    assert code == cli.EXIT_CLOSED_PIPE == 141 and err == ""
+    code, err = _closed_pipe("--help")   # argparse drops help it cannot write (status 0); else cleatfmu: 141
+    assert code in (0, cli.EXIT_CLOSED_PIPE) and err == ""
+
+
+def test_head_closing_the_pipe_early_no_traceback():
+    done = subprocess.run(f"{shlex.quote(sys.executable)} -m identification.cli identify --example 7kmh | head -c1",
+                          shell=True, capture_output=True, text=True, timeout=120)
+    assert "Traceback" not in done.stderr and done.stderr == "" and len(done.stdout) == 1
+
+
+def test_broken_stdout_in_process(monkeypatch, capsys):
+    class Closed(io.StringIO):
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+    monkeypatch.setattr(sys, "stdout", Closed())
+    assert cli.main(["rig", "--list-params"]) == 141
+
+
+# ----------------------------------------------------------------------------- 5. tire names
+
+def test_choose_tire_any_case():
+    rec = SimpleNamespace(source="r.csv", tires=("FL", "RR"), accel_m_s2={"FL": 0, "RR": 0})
+    assert choose_tire(rec, "fl") == "FL" and choose_tire(rec, " Rr ") == "RR"
+    with pytest.raises(InputError, match="tire FR is not in the recording"):
+        choose_tire(rec, "fr")
+    assert cli._tire_list(["fl,Rr", "FL"]) == ["FL", "RR"]
+    with pytest.raises(InputError, match="unknown tire 'XX'"):
+        cli._tire_list(["xx"])
+
+
+# ----------------------------------------------------------------------------- 6. defaults in --help
+
+def test_every_default_is_in_the_help():
+    for name, sub in _subparsers().items():
+        formatter = sub._get_formatter()
+        for action in sub._actions:
+            if action.default in (None, False, argparse.SUPPRESS) or action.help in (None, argparse.SUPPRESS):
+                continue
+            assert "default" in formatter._expand_help(action).lower(), (name, action.dest)
+        assert "default: None" not in sub.format_help() and "default: False" not in sub.format_help(), name
+
+
+# ----------------------------------------------------------------------------- 7. -v for timings
+
+def test_diagnose_timings_only_with_verbose(cli, fake_diagnosis):
+    quiet = cli("diagnose", "--example", "7kmh")
+    loud = cli("diagnose", "--example", "7kmh", "-v")
+    assert quiet.code == loud.code == 0, (quiet.err, loud.err)
+    assert "s diagnosis" not in quiet.out and "4.2 s diagnosis, 1.5 s FMU gain check" in loud.out

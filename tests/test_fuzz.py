@@ -1,0 +1,599 @@
+"""Property-based fuzzing of the command-line input handling (Hypothesis).
+
+Every generated input must end in one of two ways:
+
+* a valid result: exit status 0, and for ``identify --json`` a parseable
+  document whose k and c are finite numbers (k > 0, c >= 0); for ``export`` the
+  FMU file (and the missing folders of its path) and nothing else;
+* a user error: exit status 2, stderr exactly one line
+  ``cleatfmu: error: <file or option>: <problem>``, and no file written.
+
+Never a traceback and never a leftover file (temporary ``.tmp``/``.part``
+staging files included).  The strategies start from a small valid recording
+of the virtual rig and mutate it (CSV cells, header, time column, sidecar
+keys, identified parameters, command-line options).
+
+The CI run is bounded (a few hundred cases, seconds); a larger run with the
+same strategies is ``benchmarks/fuzz_large.py``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import io
+import json
+import math
+import os
+import sys
+import tempfile
+import traceback
+import warnings
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+hypothesis = pytest.importorskip("hypothesis")
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+__all__ = ["FuzzFailure", "Case", "recording_cases", "sidecar_cases", "identify_option_cases",
+           "params_cases", "export_option_cases", "ALL_STRATEGIES", "check_case"]
+
+# ----------------------------------------------------------------------------- valid starting points
+
+
+@functools.lru_cache(maxsize=1)
+def base_files() -> dict[str, bytes]:
+    """The valid inputs every case mutates: ``csv``, ``json`` (sidecar) and ``params`` (identify --json)."""
+    from identification.cli import main
+    from identification.rig import run_rig
+    from identification.rig.generate import write_run
+
+    run = run_rig((), {"sensor.channels": "FL", "sensor.rate_hz": 500.0}, seed=1)
+    with tempfile.TemporaryDirectory() as work:
+        csv, _ = write_run(run, Path(work, "base"))
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            status = main(["identify", str(csv), "--json", "--method", "waveform"])
+        assert status == 0
+        params = json.loads(out.getvalue())
+        params["recording"] = "base.csv"
+        return {"csv": csv.read_bytes(), "json": Path(work, "base.json").read_bytes(),
+                "params": json.dumps(params, indent=2).encode()}
+
+
+# ----------------------------------------------------------------------------- a case
+
+
+@dataclass
+class Case:
+    """One generated command line and the files it reads.
+
+    Attributes
+    ----------
+    command : str
+        ``identify`` or ``export``.
+    files : dict of str to bytes
+        File name (relative to the case folder) -> content.
+    args : list of str
+        Arguments after the command; ``{dir}`` is replaced by the case folder.
+    """
+
+    command: str
+    files: dict[str, bytes]
+    args: list[str] = field(default_factory=list)
+
+    def __repr__(self) -> str:  # the base files are long: show only what differs from them
+        base = {"rec.csv": "csv", "rec.json": "json", "params.json": "params"}
+        shown = {}
+        for name, data in self.files.items():
+            original = base_files().get(base.get(name, ""))
+            if data == original:
+                shown[name] = "<valid>"
+                continue
+            start = 0
+            if original is not None:
+                while start < min(len(data), len(original)) and data[start] == original[start]:
+                    start += 1
+                start = max(0, start - 40)
+            shown[name] = f"<{len(data)} bytes, from byte {start}: {data[start:start + 160]!r}>"
+        return f"Case({self.command!r}, files={shown}, args={self.args!r})"
+
+    def _repr_pretty_(self, printer, cycle) -> None:  # Hypothesis prints failing cases with this
+        printer.text(repr(self))
+
+    def argv(self, folder: Path) -> list[str]:
+        """The full argument list, in `folder`."""
+        return [self.command] + [a.replace("{dir}", str(folder)) for a in self.args]
+
+
+class FuzzFailure(AssertionError):
+    """A generated case broke the contract (traceback, wrong exit status, bad message, leftover file)."""
+
+
+class _Raw(str):
+    """A JSON number written verbatim (e.g. an integer of 5000 digits, beyond ``json.dumps``)."""
+
+
+def dumps_raw(value) -> bytes:
+    """`value` as JSON text; :class:`_Raw` strings become bare number literals."""
+    raws: list[str] = []
+
+    def swap(v):
+        if isinstance(v, _Raw):
+            raws.append(str(v))
+            return f"\x00RAW{len(raws) - 1}\x00"
+        if isinstance(v, dict):
+            return {k: swap(x) for k, x in v.items()}
+        if isinstance(v, list):
+            return [swap(x) for x in v]
+        return v
+
+    text = json.dumps(swap(value), indent=1)  # NaN and Infinity are written as Python's json writes them
+    for i, raw in enumerate(raws):
+        text = text.replace(json.dumps(f"\x00RAW{i}\x00"), raw)
+    return text.encode("utf-8")
+
+
+# ----------------------------------------------------------------------------- strategies: values
+
+#: Cells that are no plain decimal number, or are extreme ones.
+BAD_CELLS = ["", " ", "abc", "nan", "NaN", "-nan", "inf", "-inf", "Infinity", "1e309", "-1e309", "1e307",
+             "-1e307", "1e-320", "0x10", "1_000", "1,5", "1;5", "+", "-", ".", "1e", "--1", "\t", "\"1\"",
+             "\u00e9", "\u2212" "1", "0", "-0", "1" * 400, "9" * 5000]
+
+numbers = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.sampled_from([0, -1, 0.0, -0.0, 1e-320, 5e-324, 1e-300, 1e307, 1e308, -1e308, 10 ** 30, 2 ** 63, -2 ** 63]),
+    st.integers(min_value=-10 ** 20, max_value=10 ** 20),
+)
+#: JSON integers longer than Python's default int/str conversion limit (4300 digits) and other huge literals.
+huge_literals = st.one_of(
+    st.integers(min_value=4290, max_value=6000).map(lambda n: _Raw("9" * n)),
+    st.integers(min_value=4290, max_value=6000).map(lambda n: _Raw("-" + "1" * n)),
+    st.sampled_from([_Raw("1e400"), _Raw("-1e400"), _Raw("1" * 400), _Raw("1" * 400 + ".5"), _Raw("1e-400")]),
+)
+json_scalars = st.one_of(st.none(), st.booleans(), st.text(max_size=8), numbers, huge_literals)
+json_values = st.recursive(json_scalars, lambda inner: st.one_of(
+    st.lists(inner, max_size=3), st.dictionaries(st.text(max_size=5), inner, max_size=3)), max_leaves=6)
+garbage = st.one_of(st.binary(max_size=200), st.text(max_size=200).map(lambda s: s.encode("utf-8")),
+                    st.sampled_from([b"", b"\n", b"\xff\xfe\x00", b"\x00" * 50, b"\xef\xbb\xbf", b"{", b"[]",
+                                     b"null", b"1", b'"x"']))
+
+
+# ----------------------------------------------------------------------------- strategies: CSV
+
+
+def _csv_lines() -> list[str]:
+    return base_files()["csv"].decode().splitlines()
+
+
+@st.composite
+def csv_mutation(draw, lines: list[str]) -> list[str]:
+    """One mutation of the CSV (as a list of lines)."""
+    n = len(lines)
+    kind = draw(st.sampled_from(["cell", "cell", "header", "swap", "duplicate", "delete", "truncate",
+                                 "scale_time", "scale_accel", "shift_time", "append", "extra_column",
+                                 "short_row", "blank_lines", "separator"]))
+    lines = list(lines)
+    if kind == "cell":
+        row = draw(st.integers(1, n - 1))
+        col = draw(st.integers(0, lines[row].count(",")))
+        cells = lines[row].split(",")
+        cells[col] = draw(st.one_of(st.sampled_from(BAD_CELLS), st.floats().map(repr),
+                                    st.text(max_size=6).filter(lambda s: "\n" not in s and "\r" not in s)))
+        lines[row] = ",".join(cells)
+    elif kind == "header":
+        lines[0] = draw(st.one_of(
+            st.sampled_from(["", "time", "Time,FL", "time,fl", "time,FL,FL", "time,XX", "time;FL", "FL,time",
+                             "time,FL,FR", "time,", ",FL", " time , FL ", "time,FL,RR", "\ufefftime,FL",
+                             "time,FL,FR,RL,RR,FL"]),
+            st.text(max_size=20).filter(lambda s: "\n" not in s and "\r" not in s)))
+    elif kind == "swap":
+        i = draw(st.integers(1, n - 2))
+        lines[i], lines[i + 1] = lines[i + 1], lines[i]
+    elif kind == "duplicate":
+        i = draw(st.integers(1, n - 1))
+        lines.insert(i, lines[i])
+    elif kind == "delete":
+        i = draw(st.integers(1, n - 1))
+        del lines[i]
+    elif kind == "truncate":
+        lines = lines[:draw(st.integers(0, n))]
+    elif kind in ("scale_time", "scale_accel", "shift_time"):
+        factor = draw(st.one_of(st.sampled_from([0.0, -1.0, 1e-300, 1e-12, 1e-3, 1e3, 1e12, 1e300, 1e307, 1e308]),
+                                st.floats(min_value=-1e308, max_value=1e308)))
+        col = 0 if kind != "scale_accel" else 1
+        out = [lines[0]]
+        for ln in lines[1:]:
+            cells = ln.split(",")
+            try:
+                v = float(cells[col])
+                v = v + factor if kind == "shift_time" else v * factor
+                cells[col] = repr(v)
+            except (ValueError, IndexError):
+                pass
+            out.append(",".join(cells))
+        lines = out
+    elif kind == "append":
+        lines.append(draw(st.text(max_size=30).filter(lambda s: "\n" not in s and "\r" not in s)))
+    elif kind == "extra_column":
+        lines = [ln + ",0" for ln in lines]
+    elif kind == "short_row":
+        i = draw(st.integers(1, n - 1))
+        lines[i] = lines[i].split(",")[0]
+    elif kind == "blank_lines":
+        i = draw(st.integers(1, n - 1))
+        lines.insert(i, draw(st.sampled_from(["", " ", "\t", ","])))
+    elif kind == "separator":
+        lines = [ln.replace(",", draw(st.sampled_from([";", "\t", ", ", " ,"]))) for ln in lines]
+    return lines
+
+
+@st.composite
+def csv_contents(draw) -> bytes:
+    """The base CSV with 1-3 mutations, or garbage."""
+    if draw(st.integers(0, 9)) == 0:
+        return draw(garbage)
+    lines = _csv_lines()
+    for _ in range(draw(st.integers(1, 3))):
+        if len(lines) < 3:
+            break
+        lines = draw(csv_mutation(lines))
+    end = draw(st.sampled_from(["\n", "\r\n", ""]))
+    return (end or "\n").join(lines).encode("utf-8") + end.encode()
+
+
+# ----------------------------------------------------------------------------- strategies: sidecar
+
+_SIDECAR_KEYS = ["format", "speed_kmh", "cleat_height_mm", "cleat_width_mm", "wheelbase_m", "wheel_load_kN",
+                 "description", "acquisition"]
+_ACQ_KEYS = ["anti_alias_order", "anti_alias_cutoff_hz", "highpass_hz"]
+
+
+@st.composite
+def sidecar_contents(draw) -> bytes:
+    """The base sidecar with 1-3 key mutations (missing, extra, wrong type, extreme value), or garbage."""
+    if draw(st.integers(0, 9)) == 0:
+        return draw(garbage)
+    meta = json.loads(base_files()["json"])
+    for _ in range(draw(st.integers(1, 3))):
+        kind = draw(st.sampled_from(["delete", "set", "set", "extra", "load", "load", "acquisition",
+                                     "acquisition", "scale"]))
+        if kind == "delete" and meta:
+            del meta[draw(st.sampled_from(sorted(meta)))]
+        elif kind == "set":
+            meta[draw(st.sampled_from(_SIDECAR_KEYS))] = draw(json_values)
+        elif kind == "extra":
+            meta[draw(st.text(max_size=10))] = draw(json_values)
+        elif kind == "load":
+            loads = meta.get("wheel_load_kN")
+            loads = dict(loads) if isinstance(loads, dict) else {}
+            loads[draw(st.sampled_from(["FL", "FR", "XX", "", "fl"]))] = draw(json_values)
+            if draw(st.booleans()) and "FL" in loads:
+                del loads["FL"]
+            meta["wheel_load_kN"] = loads
+        elif kind == "acquisition":
+            acq = meta.get("acquisition")
+            acq = dict(acq) if isinstance(acq, dict) else {}
+            acq[draw(st.sampled_from(_ACQ_KEYS + ["bogus"]))] = draw(st.one_of(
+                json_values, st.integers(-3, 20), st.sampled_from([0.0, 124.9, 125.0, 249.99, 250.0, 1e308]),
+                st.floats(min_value=0, max_value=1e4)))
+            meta["acquisition"] = acq
+        else:  # scale: absurd but positive physical values
+            key = draw(st.sampled_from(_SIDECAR_KEYS[1:5]))
+            meta[key] = draw(st.one_of(st.sampled_from([1e-300, 5e-324, 1e-9, 1e6, 1e300, 1e308, 1, 10 ** 30]),
+                                       st.floats(min_value=1e-300, max_value=1e308)))
+    return dumps_raw(meta)
+
+
+# ----------------------------------------------------------------------------- strategies: options
+
+cutoffs = st.one_of(
+    st.sampled_from(["0", "-1", "-0.0", "nan", "-nan", "inf", "-inf", "1e308", "1e-320", "5e-324", "249.99",
+                     "250", "1000", "1e400", "100", "60", "20", "0.5"]),
+    st.floats().map(repr))
+tire_options = st.sampled_from([None, "FL", "FR", "RR", "XX", "fl", "FL,FR", "FL FL", "FL,XX"])
+
+
+def _identify_args(draw, csv_name: str = "rec.csv") -> list[str]:
+    args = ["{dir}/" + csv_name]
+    args += ["--method=" + draw(st.sampled_from(["paper", "waveform"]))]
+    if draw(st.booleans()):
+        args.append("--json")
+    return args
+
+
+def _option_args(draw) -> list[str]:
+    args = []
+    if draw(st.booleans()):
+        args.append("--cutoff-hz=" + draw(cutoffs))
+    tire = draw(tire_options)
+    if tire is not None:
+        args.append("--tire=" + tire)
+    return args
+
+
+@st.composite
+def recording_cases(draw) -> Case:
+    """``identify`` of a recording with a mutated CSV."""
+    return Case("identify", {"rec.csv": draw(csv_contents()), "rec.json": base_files()["json"]},
+                _identify_args(draw) + (["--json"] if draw(st.booleans()) else []))
+
+
+@st.composite
+def sidecar_cases(draw) -> Case:
+    """``identify`` of a recording with a mutated sidecar."""
+    files = {"rec.csv": base_files()["csv"], "rec.json": draw(sidecar_contents())}
+    if draw(st.integers(0, 19)) == 0:
+        del files["rec.json"]
+    return Case("identify", files, _identify_args(draw))
+
+
+@st.composite
+def identify_option_cases(draw) -> Case:
+    """``identify`` of the valid recording with mutated options (cut-off, tire, method)."""
+    files = {"rec.csv": base_files()["csv"], "rec.json": base_files()["json"]}
+    name = draw(st.sampled_from(["rec.csv", "rec.csv", "missing.csv", "rec.json", "rec.CSV", "."]))
+    return Case("identify", files, _identify_args(draw, name) + _option_args(draw))
+
+
+# ----------------------------------------------------------------------------- strategies: export
+
+_ENTRY_KEYS = ["k", "c", "T", "delta", "zeta", "omega_n", "r2", "n_peaks", "mass", "k_ci", "c_ci"]
+physical = st.one_of(
+    numbers, huge_literals, st.sampled_from(["1e5", "NaN", "nan", "inf", "", "abc", None, True, [], {}, [1, 2]]))
+
+
+@st.composite
+def params_contents(draw) -> bytes:
+    """The base ``identify --json`` document with 1-3 mutations of k, c, mass, ... or of its structure."""
+    if draw(st.integers(0, 14)) == 0:
+        return draw(garbage)
+    doc = json.loads(base_files()["params"])
+    entry = doc["tires"]["FL"]
+    for _ in range(draw(st.integers(1, 3))):
+        kind = draw(st.sampled_from(["k", "c", "k", "c", "mass", "entry", "ci", "delete", "doc", "tires"]))
+        if kind in ("k", "c", "mass"):
+            entry[kind] = draw(physical)
+        elif kind == "entry":
+            entry[draw(st.sampled_from(_ENTRY_KEYS))] = draw(physical)
+        elif kind == "ci":
+            entry[draw(st.sampled_from(["k_ci", "c_ci"]))] = draw(st.one_of(
+                st.lists(physical, max_size=3), json_values))
+        elif kind == "delete" and entry:
+            del entry[draw(st.sampled_from(sorted(entry)))]
+        elif kind == "doc":
+            doc[draw(st.sampled_from(["recording", "speed_kmh", "tires", "extra"]))] = draw(json_values)
+        else:
+            doc["tires"] = draw(st.one_of(
+                st.just({}), st.just({"FL": entry, "FR": dict(entry)}), st.just({"XX": entry}),
+                st.just({"FL": entry})))
+    return dumps_raw(doc)
+
+
+outputs = st.sampled_from([None, "{dir}/out/FL.fmu", "{dir}/out/FL.fmu", "{dir}/missing/FL.fmu", "{dir}/out",
+                           "{dir}/out/FL.zip", "{dir}/out/.fmu", "{dir}/out/FL.FMU", "{dir}/out/sub.fmu"])
+radii = st.one_of(st.none(), st.sampled_from(["0", "-1", "nan", "inf", "-inf", "1e308", "5e-324", "0.75", "1e-300",
+                                              "1e400"]), st.floats().map(repr))
+
+
+def _export_args(draw, params_name: str = "params.json") -> list[str]:
+    args = ["{dir}/" + params_name]
+    out = draw(outputs)
+    # without -o the FMU would land in the working folder; the case always names one
+    args.append("--output=" + (out or "{dir}/out/FL.fmu"))
+    tire = draw(st.sampled_from([None, None, "FL", "FR", "XX", ""]))
+    if tire is not None:
+        args.append("--tire=" + tire)
+    radius = draw(radii)
+    if radius is not None:
+        args.append("--unloaded-radius-m=" + radius)
+    return args
+
+
+@st.composite
+def params_cases(draw) -> Case:
+    """``export`` of a mutated parameter file."""
+    args = _export_args(draw)
+    return Case("export", {"params.json": draw(params_contents()), "out/.keep": b""}, args)
+
+
+@st.composite
+def export_option_cases(draw) -> Case:
+    """``export`` of the valid parameter file with mutated options (backend, FMI version, platforms)."""
+    args = _export_args(draw, draw(st.sampled_from(["params.json", "params.json", "missing.json", "out"])))
+    backend = draw(st.sampled_from([None, "native", "native", "bogus", ""]))
+    if backend is not None:
+        args.append("--backend=" + backend)
+    version = draw(st.sampled_from([None, "2", "3", "1", "0", "-2", "4"]))
+    if version is not None:
+        args.append("--fmi-version=" + version)
+    platforms = draw(st.sampled_from([None, "linux64", "win64,darwin64", "x86_64-linux", "bogus", "", ",",
+                                      "linux64,linux64"]))
+    if platforms is not None:
+        args.append("--platforms=" + platforms)
+    return Case("export", {"params.json": base_files()["params"], "out/.keep": b""}, args)
+
+
+#: Every strategy, by test name (the benchmark runs them all).
+ALL_STRATEGIES = {"recording": recording_cases, "sidecar": sidecar_cases, "identify_options": identify_option_cases,
+                  "params": params_cases, "export_options": export_option_cases}
+
+
+# ----------------------------------------------------------------------------- the property
+
+
+def _listing(folder: Path) -> set[str]:
+    return {str(Path(root, name).relative_to(folder)) for root, dirs, files in os.walk(folder)
+            for name in files + dirs}
+
+
+@contextlib.contextmanager
+def _native_output(sink):
+    """Send what native code writes to file descriptors 1 and 2 (e.g. LAPACK's messages) to `sink`."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = {fd: os.dup(fd) for fd in (1, 2)}
+    try:
+        for fd in saved:
+            os.dup2(sink.fileno(), fd)
+        yield
+    finally:
+        for fd, copy in saved.items():
+            os.dup2(copy, fd)
+            os.close(copy)
+
+
+def _run(argv: list[str]) -> tuple[int | None, str, str, str | None]:
+    """Run the CLI in-process: (status, stdout, stderr, traceback text of an escaping exception).
+
+    Warnings are shown as in a fresh process (once per location and run), and what native code
+    writes to the process's stdout or stderr is appended to stderr.
+    """
+    from identification.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    status, tb = None, None
+    with tempfile.TemporaryFile() as sink:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), _native_output(sink), \
+                warnings.catch_warnings():
+            warnings.resetwarnings()
+            warnings.simplefilter("default")
+            try:
+                status = main(argv)
+            except SystemExit as exc:  # argparse rejects the command line itself
+                status = exc.code
+            except Exception:
+                tb = traceback.format_exc()
+        sink.seek(0)
+        native = sink.read().decode("utf-8", "replace")
+    return status, out.getvalue(), err.getvalue() + native, tb
+
+
+def _check_identify_output(stdout: str, as_json: bool) -> None:
+    if not as_json:
+        if not stdout.startswith("Recording "):
+            raise FuzzFailure(f"no result table on stdout: {stdout[:200]!r}")
+        return
+
+    def refuse(token):
+        raise FuzzFailure(f"identify --json wrote {token} (not JSON)")
+
+    doc = json.loads(stdout, parse_constant=refuse)
+    if not doc["tires"]:
+        raise FuzzFailure("identify --json succeeded with no tire")
+    for name, entry in doc["tires"].items():
+        k, c = entry["k"], entry["c"]
+        if not (math.isfinite(k) and k > 0 and math.isfinite(c) and c >= 0):
+            raise FuzzFailure(f"identify --json: tire {name}: k = {k!r}, c = {c!r}")
+
+
+def check_case(case: Case, details: dict | None = None) -> str:
+    """Run `case` in a fresh folder; return ``"valid"`` or ``"error"``, or raise :class:`FuzzFailure`.
+
+    Parameters
+    ----------
+    case : Case
+    details : dict, optional
+        Filled with ``argv``, ``status`` and the error ``message`` (without the folder), when given.
+
+    Returns
+    -------
+    str
+        ``"valid"`` (exit 0, a sound result) or ``"error"`` (exit 2, one line naming a file or option).
+
+    Raises
+    ------
+    FuzzFailure
+        A traceback, another exit status, a malformed error message, or a file written on error.
+    """
+    with tempfile.TemporaryDirectory(prefix="cleatfmu_fuzz_") as work:
+        folder = Path(work)
+        for name, data in case.files.items():
+            path = folder / name
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(data)
+        stage = folder / "tmp"  # the process's temporary folder during the run: it must stay empty
+        stage.mkdir()
+        before = _listing(folder)
+        argv = case.argv(folder)
+        saved = tempfile.tempdir
+        tempfile.tempdir = str(stage)
+        try:
+            status, stdout, stderr, tb = _run(argv)
+        finally:
+            tempfile.tempdir = saved
+        after = _listing(folder)
+        new = after - before
+        where = f"cleatfmu {' '.join(argv)}"
+        if details is not None:
+            details.update(argv=argv, status=status, message=stderr.strip().replace(str(folder), "{dir}"))
+        if tb is not None:
+            raise FuzzFailure(f"{where}: traceback\n{tb}")
+        if status == 0:
+            if case.command == "identify":
+                if new:
+                    raise FuzzFailure(f"{where}: identify wrote {sorted(new)}")
+                _check_identify_output(stdout, "--json" in argv)
+            else:
+                fmu = [n for n in new if (folder / n).is_file()]
+                folders = {str(p) for p in Path(fmu[0]).parents if str(p) != "."} if len(fmu) == 1 else set()
+                if len(fmu) != 1 or not fmu[0].lower().endswith(".fmu") or set(new) - set(fmu) - folders:
+                    raise FuzzFailure(f"{where}: export wrote {sorted(new)} (expected one FMU, and its folders)")
+                with zipfile.ZipFile(folder / fmu[0]) as z:
+                    if "modelDescription.xml" not in z.namelist():
+                        raise FuzzFailure(f"{where}: the FMU has no modelDescription.xml")
+            return "valid"
+        if status != 2:
+            raise FuzzFailure(f"{where}: exit status {status!r}; stderr {stderr!r}")
+        lines = stderr.splitlines()
+        if len(lines) != 1 or not stderr.endswith("\n") or not lines[0].startswith("cleatfmu: error: "):
+            raise FuzzFailure(f"{where}: exit 2 but stderr is not one 'cleatfmu: error: ' line: {stderr!r}")
+        message = lines[0][len("cleatfmu: error: "):]
+        if not (message.startswith("--") or message.startswith(str(folder))):
+            raise FuzzFailure(f"{where}: the message names no file or option: {message!r}")
+        if new:
+            raise FuzzFailure(f"{where}: exit 2 but wrote {sorted(new)}")
+        return "error"
+
+
+# ----------------------------------------------------------------------------- the CI run
+
+#: Reproducible and bounded: derandomized, no example database, no deadline (first cases build caches).
+CI = settings(deadline=None, derandomize=True, database=None, print_blob=True,
+              suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
+                                     HealthCheck.filter_too_much, HealthCheck.large_base_example])
+
+
+@settings(CI, max_examples=300)
+@given(case=recording_cases())
+def test_identify_mutated_csv(case):
+    check_case(case)
+
+
+@settings(CI, max_examples=200)
+@given(case=sidecar_cases())
+def test_identify_mutated_sidecar(case):
+    check_case(case)
+
+
+@settings(CI, max_examples=120)
+@given(case=identify_option_cases())
+def test_identify_options(case):
+    check_case(case)
+
+
+@settings(CI, max_examples=150)
+@given(case=params_cases())
+def test_export_mutated_params(case):
+    check_case(case)
+
+
+@settings(CI, max_examples=80)
+@given(case=export_option_cases())
+def test_export_options(case):
+    check_case(case)
