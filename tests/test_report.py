@@ -173,6 +173,41 @@ def test_report_renders_in_headless_chromium(demo, tmp_path):
     assert ink > 0.03 and colours > 100, (ink, colours)
 
 
+def test_every_link_of_the_demo_report_resolves(demo):
+    code, out = demo
+    html = (out / "report.html").read_text()
+    ids = set(re.findall(r'id="([^"]+)"', html))
+    links = re.findall(r'href="([^"]+)"', html)
+    assert len(links) > 30
+    for link in links:
+        if link.startswith("#"):
+            assert link[1:] in ids, link
+        else:
+            assert not link.startswith(("http:", "https:", "/")), link
+            assert (out / link).is_file(), link
+
+
+@pytest.mark.parametrize("width", [1400, 800])
+def test_report_fits_the_window_in_headless_chromium(demo, tmp_path, width):
+    """No horizontal overflow: the page's scrollWidth (read by a script added to a copy) within the viewport."""
+    code, out = demo
+    browser = _chromium()
+    probe = out / f".probe{width}.html"
+    probe.write_text((out / "report.html").read_text().replace(
+        "</body>", "<script>document.title='W'+document.documentElement.scrollWidth;</script></body>"))
+    try:
+        dom = subprocess.run([browser, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                              "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                              f"--user-data-dir={tmp_path / 'profile'}", "--hide-scrollbars",
+                              f"--window-size={width},1000", "--dump-dom", probe.resolve().as_uri()],
+                             capture_output=True, text=True, timeout=180).stdout
+    finally:
+        probe.unlink()
+    found = re.search(r"<title>W(\d+)</title>", dom)
+    assert found, dom[:300]
+    assert int(found.group(1)) <= width, (width, found.group(1))
+
+
 def test_report_with_a_broken_recording(cli, tmp_path):
     data = tmp_path / "day"
     data.mkdir()
