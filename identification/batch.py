@@ -320,7 +320,7 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
     remove_staging(out_dir)
     figures = out_dir / FIGURES_STAGING
     figures.mkdir()
-    reports, jobs, stems = [], [], set()
+    reports, jobs, stems, order = [], [], set(), {}
     for path in paths:
         stem = Path(path).stem
         while stem in stems:
@@ -336,6 +336,7 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
         # the joint diagnoses take longest: they go first
         jobs.insert(0, ("recording", str(path), stem, str(out_dir)))
         jobs += [("tire", str(path), stem, tire, str(out_dir)) for tire in rec.tires]
+        order[stem] = list(rec.tires)
     workers = max(1, min(workers or os.cpu_count() or 1, len(jobs) or 1))
     from tqdm import tqdm
     from .executors import executor_for
@@ -355,6 +356,8 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
             by_stem[rep.recording].diagnosis = rep
         else:
             by_stem[rep.recording].tires.append(rep)
+    for r in reports:   # results arrive in any order: the tires in the recording's file order
+        r.tires.sort(key=lambda t: order[r.stem].index(t.tire))
     totals: dict = {}
     for rep in results:
         for stage, sec in rep.timings.items():

@@ -47,3 +47,23 @@ def test_an_unusable_scheduler_is_one_line_and_exit_2(cli, day, tmp_path, addres
         executors.DaskExecutor.__init__.__defaults__ = (10.0,)
     assert res.code == 2 and res.err.startswith("cleatfmu: error: --scheduler:") and problem in res.err, res.err
     assert res.err.count("\n") == 1
+
+
+def test_tires_keep_the_file_order_whatever_order_the_results_arrive_in(day, tmp_path, monkeypatch):
+    import identification.batch as batch
+    from identification import executors
+
+    class Reversed(executors.LocalExecutor):
+        def map_unordered(self, fn, jobs):
+            yield from reversed([fn(job) for job in jobs])
+
+    monkeypatch.setattr(executors, "executor_for", lambda workers, scheduler=None: Reversed(1))
+    calls = []
+    monkeypatch.setattr(batch, "_job", lambda job: calls.append(job) or (
+        batch.DiagnosisReport(recording=job[2]) if job[0] == "recording" else
+        batch.TireReport(recording=job[2], tire=job[3])))
+    from identification.rig import run_rig, write_run
+    write_run(run_rig((), {"sensor.channels": "RR,FL"}, seed=3), tmp_path / "two")
+    result = batch.run_batch([tmp_path / "two.csv"], tmp_path / "out", workers=1, progress=False)
+    from identification.recording import read_recording
+    assert [t.tire for t in result.recordings[0].tires] == list(read_recording(tmp_path / "two.csv").tires)

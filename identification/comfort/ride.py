@@ -191,6 +191,7 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
     dict of str to RideRun
         The rating covers the ride after both axles are past the fade-in.
     """
+    from ..model.kernels import run_model
     from .iso2631 import comfort
 
     seat_x = SEAT_X_FRACTION * body.wheelbase_m if seat_x_m is None else float(seat_x_m)
@@ -205,7 +206,6 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
         laws = [_point_contact(k[t], c[t], load) for t, load in zip(body.tires, body.loads_n)]
         model = ride_model(body, laws, speed_m_s=speed_m_s, road_x_m=road.x_m, road_left_m=road.left_m,
                            road_right_m=road.right_m)
-        from ..model.kernels import run_model
         traj = run_model(model, *model.grid(0.0, duration_s, step_s))
         keep = traj.time_s >= settle_s
         seat = seat_acceleration(model, traj, seat_x_m=seat_x, seat_y=seat_y)[keep]
