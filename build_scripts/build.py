@@ -258,6 +258,8 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r} (known: {', '.join(BACKENDS)})")
     k = load_kind(kind)
+    if backend not in k.backends:
+        raise ValueError(f"FMU kind {k.name} has no {backend} backend (it has: {', '.join(k.backends)})")
     starts = resolve_start_values(k, start_values)
     if backend == "native":
         return _build_native(k, dest, starts, start_values or {}, provenance, description, fmi_version, platforms)
@@ -293,11 +295,15 @@ def _build_native(k, dest: Path, starts, given, provenance, description, fmi_ver
     from .native_fmu import equilibrium_starts, native_fmu_bytes
 
     law = {n: starts[n] for n in k.names("parameter")}
-    problem = (extended_parameter_problem(law) if "static_load" in law
-               else parameter_problem(law["stiffness"], law["damping"], law["unloaded_radius"]))
+    if "stiffness" not in law:            # the body
+        problem = _body_problem(law)
+    else:
+        problem = (extended_parameter_problem(law) if "static_load" in law
+                   else parameter_problem(law["stiffness"], law["damping"], law["unloaded_radius"]))
     if problem is not None:
         raise ValueError(f"FMU kind {k.name}: invalid start values: {problem}")
-    starts = equilibrium_starts(k, starts, given)
+    if "stiffness" in law:
+        starts = equilibrium_starts(k, starts, given)
     if description is None:
         description = k.native.get("description") or f"cleatfmu {k.name} tire (native C), SI units"
     data = native_fmu_bytes(k, starts, description=description, version=project_version(), fmi_version=fmi_version,
@@ -315,6 +321,23 @@ def _build_native(k, dest: Path, starts, given, provenance, description, fmi_ver
         tmp.unlink(missing_ok=True)
         raise
     return dest
+
+
+def _body_problem(params: dict) -> str | None:
+    """Why the body's parameters do not make a tractor (the model record's own check), or None."""
+    from identification.model.tractor import Body
+    from identification.recording import TIRES
+
+    try:
+        Body(tires=TIRES, loads_n=tuple(params[f"load_{t}"] for t in TIRES), wheelbase_m=params["wheelbase"],
+             pitch=params["pitch_coupling"], roll=params["roll_coupling"], pivot=params["front_axle_pivot"],
+             pitch_index=params["pitch_index"],
+             roll_index=params["roll_index"], pivot_index=params["pivot_index"])
+    except ValueError as exc:
+        return str(exc)
+    if not params["wheelbase"] > 0:
+        return f"wheelbase must be > 0 m, got {params['wheelbase']!r}"
+    return None
 
 
 def _finish_xml(xml: bytes, kind: FmuKind, starts: dict, description: str | None, guid: str) -> bytes:

@@ -11,7 +11,9 @@ A kind is a folder ``fmu_src/<kind>/`` with
   {...}}``, the regression result of the default experiment, run with the
   kind's default start values updated by the optional ``start_values``) and
   ``fmu_state`` (whether the kind supports getting, setting and serializing
-  its state);
+  its state) and the optional ``backends`` (default both; a native-only kind,
+  ``["native"]``, has no pythonfmu slave: its script holds only the variable
+  table, and its model is the C code of ``fmu_src/native``);
 * the slave script and files, one of which declares the variables in one
   literal table ``VARIABLES`` (read here with :mod:`ast`, without importing
   anything) and the name of the start-value file in ``START_FILE``.
@@ -69,6 +71,7 @@ class FmuKind:
     start_file: str
     variables: tuple
     native: dict = None
+    backends: tuple = ("pythonfmu", "native")
 
     @property
     def module_name(self) -> str:
@@ -157,6 +160,9 @@ def load_kind(name: str) -> FmuKind:
         modules, reference, fmu_state = dict(manifest["modules"]), manifest["reference"], bool(manifest["fmu_state"])
         ref_file, rtol, atol = reference["file"], float(reference["rtol"]), float(reference["atol"])
         ref_starts = dict(reference.get("start_values", {}))
+        backends = tuple(manifest.get("backends", ("pythonfmu", "native")))
+        if not backends or not set(backends) <= {"pythonfmu", "native"}:
+            raise ValueError(f"backends must be a non-empty subset of pythonfmu, native, got {backends}")
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"{where}: malformed manifest ({exc})") from None
     own = {filename[:-3] for filename in (script, *files)} | set(modules)
@@ -172,7 +178,7 @@ def load_kind(name: str) -> FmuKind:
     for dotted in modules.values():
         _, module_imports, _ = _literal_assignments(module_source(dotted).decode("utf-8"), dotted)
         _check_imports(module_imports, own, dotted)
-    if identifier not in classes:
+    if identifier not in classes and "pythonfmu" in backends:
         raise ValueError(f"{where}: no file of the kind defines class {identifier!r}")
     for required in ("VARIABLES", "START_FILE"):
         if required not in literals:
@@ -187,7 +193,7 @@ def load_kind(name: str) -> FmuKind:
                    reference_file=ref_file, reference_rtol=rtol, reference_atol=atol,
                    reference_start_values=ref_starts, fmu_state=fmu_state,
                    start_file=literals["START_FILE"], variables=tuple(variables),
-                   native=dict(manifest.get("native", {})))
+                   native=dict(manifest.get("native", {})), backends=backends)
 
 
 def module_name_conflicts(kinds) -> list[str]:

@@ -30,8 +30,11 @@ def _insert_in_schema_order(root: ET.Element, element: ET.Element) -> None:
     root.append(element)
 
 
-def _unknown(parent: ET.Element, index: int, deps: list[tuple[int, str]]) -> None:
+def _unknown(parent: ET.Element, index: int, deps: list[tuple[int, str]], *, explicit: bool = False) -> None:
+    """An ``Unknown`` element; without `deps` it depends on every known, unless `explicit` (then on none)."""
     attrib = {"index": str(index)}
+    if explicit and not deps:
+        attrib["dependencies"] = ""
     if deps:
         deps = sorted(deps)
         attrib["dependencies"] = " ".join(str(i) for i, _ in deps)
@@ -117,7 +120,7 @@ def complete_model_description(xml: bytes, kind: FmuKind, *, start_values: dict[
                 raise ValueError(f"kind {kind.name}: output {var.name!r} depends on {dep!r}, "
                                  f"which is not an input or parameter")
         _unknown(outputs, index[var.name],
-                 [(index[d], k) for d, k in var.depends.items() if knowns[d] == "input"])
+                 [(index[d], k) for d, k in var.depends.items() if knowns[d] == "input"], explicit=True)
         _unknown(initial, index[var.name],
                  [(index[d], _INITIAL_KINDS.get(k, "dependent")) for d, k in var.depends.items()])
     if not len(initial):

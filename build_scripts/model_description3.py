@@ -21,7 +21,10 @@ _INITIAL_KINDS = {"constant": "constant"}
 _LOG_CATEGORIES = (("logStatusError", "Why a call failed (status error)"), ("logCalls", "Every FMI function call"))
 
 
-def _dependencies(element: ET.Element, deps: list[tuple[int, str]]) -> None:
+def _dependencies(element: ET.Element, deps: list[tuple[int, str]], *, explicit: bool = False) -> None:
+    """Dependencies of an unknown; without `deps` it depends on every known, unless `explicit` (then on none)."""
+    if explicit and not deps:
+        element.set("dependencies", "")
     if deps:
         deps = sorted(deps)
         element.set("dependencies", " ".join(str(vr) for vr, _ in deps))
@@ -77,7 +80,7 @@ def model_description_fmi3(kind: FmuKind, starts: dict, *, description: str, ver
     outputs = [v for v in kind.variables if v.causality == "output"]
     for v in outputs:
         _dependencies(ET.SubElement(structure, "Output", {"valueReference": str(v.value_reference)}),
-                      [(vrs[d], k) for d, k in v.depends.items() if causality[d] == "input"])
+                      [(vrs[d], k) for d, k in v.depends.items() if causality[d] == "input"], explicit=True)
     for v in outputs:
         _dependencies(ET.SubElement(structure, "InitialUnknown", {"valueReference": str(v.value_reference)}),
                       [(vrs[d], _INITIAL_KINDS.get(k, "dependent")) for d, k in v.depends.items()])

@@ -149,10 +149,65 @@ def _extended_tire_closed_form(inputs: dict, starts: dict) -> dict:
             "road_effective_z": road}
 
 
+#: Force on each tire minus its static load in the body's default experiment, N (FL, FR, RL, RR).
+BODY_FORCE_STEPS_N = (80.0, -30.0, 45.0, -65.0)
+
+
+def _tractor_body_forces(t: np.ndarray, starts: dict) -> dict:
+    """Constant tire forces off the static loads by :data:`BODY_FORCE_STEPS_N` from the start (N)."""
+    return {f"force_{tire}": np.full_like(t, starts[f"load_{tire}"] + step)
+            for tire, step in zip(("FL", "FR", "RL", "RR"), BODY_FORCE_STEPS_N)}
+
+
+def _tractor_body_closed_form(inputs: dict, starts: dict) -> dict:
+    """Uniformly accelerated body: q = q0 + q'0 τ + a τ²/2 with a = M⁻¹ Jᵀ (F − W) constant (τ = t − t0).
+
+    J and M are those of :meth:`identification.model.tractor.Body.matrices`
+    (any body), the initial coordinates the least-squares fit of the initial
+    hub values, the seat row that of :func:`identification.ssp.body_seat_row`; the stepping scheme is exact
+    for a constant acceleration, so the FMU must match to round-off.  Hub
+    velocities are the rates at the end of each step (q'0 + a τ).
+    """
+    from identification.model.tractor import Body
+    from identification.ssp import body_seat_row
+
+    tires = ("FL", "FR", "RL", "RR")
+    forces = np.array([inputs[f"force_{t}"] for t in tires])
+    if not np.all(forces == forces[:, :1]):
+        raise ValueError("the body's closed form needs constant forces")
+    body = Body(tires=tires, loads_n=tuple(starts[f"load_{t}"] for t in tires), wheelbase_m=starts["wheelbase"],
+                pitch=bool(starts["pitch_coupling"]), roll=bool(starts["roll_coupling"]),
+                pivot=bool(starts["front_axle_pivot"]), pitch_index=starts["pitch_index"],
+                roll_index=starts["roll_index"], pivot_index=starts["pivot_index"])
+    J, mass, _ = body.matrices()
+    q0 = np.linalg.lstsq(J, np.array([starts[f"initial_hub_dz_{t}"] for t in tires]), rcond=None)[0]
+    dq0 = np.linalg.lstsq(J, np.array([starts[f"initial_hub_vz_{t}"] for t in tires]), rcond=None)[0]
+    loads = np.array([starts[f"load_{t}"] for t in tires])
+    a = (J.T @ (forces[:, 0] - loads)) / mass
+    t = inputs["time"]
+    tau = t - t[0]
+    q = q0[:, None] + dq0[:, None] * tau + 0.5 * a[:, None] * tau ** 2
+    dq = dq0[:, None] + a[:, None] * tau
+    row = body_seat_row(body, seat_x_m=starts["seat_x"], seat_y=starts["seat_y"])
+    out = {}
+    for i, tire in enumerate(tires):
+        out[f"hub_z_{tire}"] = starts[f"static_hub_z_{tire}"] + J[i] @ q
+        out[f"hub_vz_{tire}"] = J[i] @ dq
+        out[f"hub_x_{tire}"] = starts["start_x"] + starts["speed"] * t - (starts["wheelbase"] if i >= 2 else 0.0)
+        out[f"hub_az_{tire}"] = np.full_like(t, J[i] @ a)
+    out["hub_vx"] = np.full_like(t, starts["speed"])
+    out["seat_z"] = row @ q
+    out["seat_az"] = np.full_like(t, row @ a)
+    return out
+
+
 #: kind -> function(t, start values) returning the input signals of its default experiment.
-INPUT_SIGNALS = {"point_contact": _point_contact_cleat_run, "extended_tire": _extended_tire_cleat_run}
-#: kind -> function(inputs, start values) returning its outputs in closed form.
-CLOSED_FORM = {"point_contact": _point_contact_closed_form, "extended_tire": _extended_tire_closed_form}
+INPUT_SIGNALS = {"point_contact": _point_contact_cleat_run, "extended_tire": _extended_tire_cleat_run,
+                 "tractor_body": _tractor_body_forces}
+#: kind -> function(inputs, start values) returning its outputs in closed form (``inputs["time"]``: the
+#: time of each output row).
+CLOSED_FORM = {"point_contact": _point_contact_closed_form, "extended_tire": _extended_tire_closed_form,
+               "tractor_body": _tractor_body_closed_form}
 
 
 def reference_path(kind) -> Path:
@@ -203,6 +258,7 @@ def closed_form_outputs(kind, signals: dict, starts: dict) -> dict:
     """Outputs in closed form with fmpy's alignment: row 0 from inputs of row 0, row k from row k-1."""
     names = [n for n in signals if n != "time"]
     held = {n: np.concatenate([signals[n][:1], signals[n][:-1]]) for n in names}
+    held["time"] = np.asarray(signals["time"])
     return CLOSED_FORM[kind](held, starts)
 
 
@@ -216,7 +272,7 @@ def main(argv=None) -> int:
     k = load_kind(args.kind)
     starts = resolve_start_values(k, k.reference_start_values)
     with tempfile.TemporaryDirectory(prefix="cleatfmu_ref_") as tmp:
-        fmu = build_fmu(args.kind, Path(tmp) / f"{args.kind}.fmu")
+        fmu = build_fmu(args.kind, Path(tmp) / f"{args.kind}.fmu", backend=k.backends[0])
         de = read_model_description(str(fmu)).defaultExperiment
         signals = reference_signals(args.kind, float(de.startTime), float(de.stopTime), float(de.stepSize), starts)
         outputs = k.names("output")

@@ -28,13 +28,13 @@ __all__ = ["main", "build_parser", "EXIT_CLOSED_PIPE"]
 #: registers the command with ``set_defaults(func=...)``; ``func(args)``
 #: returns the exit status and raises InputError for user errors.
 _COMMAND_MODULES: list[str] = [".rig.command", ".export", ".simulate_cmd", ".diagnose.command", ".report_cmd",
-                               ".comfort.comfort_cmd", ".comfort.ride_cmd", ".static_cmd"]
+                               ".comfort.comfort_cmd", ".comfort.ride_cmd", ".static_cmd", ".ssp_cmd"]
 #: The module of each command: a command line naming one of these loads only its module (the others may
 #: import scipy, numba or matplotlib, seconds of start-up an ``export`` does not need).
 _COMMAND_MODULE_OF: dict[str, str] = {"rig": ".rig.command", "export": ".export", "simulate": ".simulate_cmd",
                                       "diagnose": ".diagnose.command", "demo": ".report_cmd",
                                       "report": ".report_cmd", "comfort": ".comfort.comfort_cmd",
-                                      "ride": ".comfort.ride_cmd", "static": ".static_cmd"}
+                                      "ride": ".comfort.ride_cmd", "static": ".static_cmd", "ssp": ".ssp_cmd"}
 
 
 def _tire_list(values: list[str] | None) -> list[str] | None:

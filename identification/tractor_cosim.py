@@ -37,7 +37,7 @@ from .scheme import Trajectory, _equilibrium_corner
 from .simulate_inputs import body_settings, read_body_document, tractor_fmu_paths
 
 __all__ = ["run_tractor_fmus", "step_body_fmus", "TractorGain", "measure_tractor_gain", "build_tractor_fmus",
-           "TractorSimulation", "simulate_tractor", "UNEXPLAINED_RATIO"]
+           "TractorSimulation", "simulate_tractor", "tractor_from_fmus", "UNEXPLAINED_RATIO"]
 
 
 def run_tractor_fmus(fmus, record: TractorModel, *, start_s: float, step_s: float, n: int) -> Trajectory:
@@ -327,9 +327,38 @@ def simulate_tractor(fmu_paths, rec, body_doc, *, cutoff_hz: float = DEFAULT_CUT
         NRMSE per channel of the sensed, low-passed co-simulated acceleration
         over the diagnosis window, the noise-only NRMSE and their ratio.
     """
+    t0 = time.perf_counter()
+    built = tractor_from_fmus(fmu_paths, rec, body_doc, cutoff_hz=cutoff_hz, step_s=step_s, body_source=body_source)
+    model, pb, theta, paths, record, body, settings, source = built
+    with ExitStack() as stack:  # each FMU opened once more for the run
+        tires = [stack.enter_context(TireFmu(paths[t], instance_name=t)) for t in pb.channels]
+        start, h, n = model.grid(record)
+        traj = run_tractor_fmus(tires, record, start_s=start, step_s=h, n=n)
+    predicted = model.predict(theta, trajectory=traj)
+    w = pb.window
+    noise = {t: float(pb.noise[t] / np.sqrt(np.mean(pb.measured[t][w] ** 2))) for t in pb.channels}
+    used = {"document": str(source), "diagnosed_recording": settings["recording"],
+            "front_axle": settings["front_axle"],
+            "pitch_index": theta.get("pitch_index"), "roll_index": theta.get("roll_index"),
+            "pivot_index": theta.get("pivot_index"), "kind": body.kind,
+            "effects": settings["tire_effects"] + settings["body_effects"],
+            "arrival_s": {t: settings["arrivals"][t] for t in pb.channels},
+            "stagger_s": settings["shared"].get("stagger"), "delay_s": settings["shared"].get("delay"),
+            "builtin_cleat": {t: bool(record.builtin_cleat(i)) for i, t in enumerate(pb.channels)}}
+    return TractorSimulation(recording=rec.source, fmus=paths, body=used, problem=pb, predicted=predicted,
+                             nrmse=_nrmse(pb, predicted), noise_nrmse=noise, step_s=h,
+                             seconds=time.perf_counter() - t0)
+
+
+def tractor_from_fmus(fmu_paths, rec, body_doc, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ,
+                      step_s: float | None = None, body_source=None):
+    """The model record of four tire FMUs under a diagnosed body over a recording (see :func:`simulate_tractor`).
+
+    Returns (fit model, problem, body indices, {tire: FMU path}, record, body, the document's settings,
+    the document's name); the record's laws are those the FMUs carry.
+    """
     from .diagnose.tractor import DEFAULT_STEP_S, TractorFitModel, TractorProblem
 
-    t0 = time.perf_counter()
     if isinstance(body_doc, (str, Path)):
         body_source = body_source or str(body_doc)
         body_doc = read_body_document(body_doc)
@@ -352,25 +381,11 @@ def simulate_tractor(fmu_paths, rec, body_doc, *, cutoff_hz: float = DEFAULT_CUT
         body = model.body(theta)
     except ValueError as exc:
         raise InputError(source, f"not a valid body: {exc}") from None
-    with ExitStack() as stack:  # each FMU opened once: its law read, then the run
-        tires = [stack.enter_context(TireFmu(paths[t], instance_name=t)) for t in pb.channels]
-        laws = tuple(_fmu_law(tire, rec.wheel_load_N[t]) for tire, t in zip(tires, pb.channels))
-        record = TractorModel(body=body, laws=laws,
-                              cleat=Cleat(rec.cleat_height_m, rec.cleat_width_m, rec.speed_m_s),
-                              arrivals_s=tuple(settings["arrivals"][t] for t in pb.channels))
-        start, h, n = model.grid(record)
-        traj = run_tractor_fmus(tires, record, start_s=start, step_s=h, n=n)
-    predicted = model.predict(theta, trajectory=traj)
-    w = pb.window
-    noise = {t: float(pb.noise[t] / np.sqrt(np.mean(pb.measured[t][w] ** 2))) for t in pb.channels}
-    used = {"document": str(source), "diagnosed_recording": settings["recording"],
-            "front_axle": settings["front_axle"],
-            "pitch_index": theta.get("pitch_index"), "roll_index": theta.get("roll_index"),
-            "pivot_index": theta.get("pivot_index"), "kind": body.kind,
-            "effects": settings["tire_effects"] + settings["body_effects"],
-            "arrival_s": {t: settings["arrivals"][t] for t in pb.channels},
-            "stagger_s": settings["shared"].get("stagger"), "delay_s": settings["shared"].get("delay"),
-            "builtin_cleat": {t: bool(record.builtin_cleat(i)) for i, t in enumerate(pb.channels)}}
-    return TractorSimulation(recording=rec.source, fmus=paths, body=used, problem=pb, predicted=predicted,
-                             nrmse=_nrmse(pb, predicted), noise_nrmse=noise, step_s=h,
-                             seconds=time.perf_counter() - t0)
+    laws = []
+    for t in pb.channels:   # each FMU's law
+        with TireFmu(paths[t], instance_name=t) as tire:
+            laws.append(_fmu_law(tire, rec.wheel_load_N[t]))
+    record = TractorModel(body=body, laws=tuple(laws),
+                          cleat=Cleat(rec.cleat_height_m, rec.cleat_width_m, rec.speed_m_s),
+                          arrivals_s=tuple(settings["arrivals"][t] for t in pb.channels))
+    return model, pb, theta, paths, record, body, settings, source

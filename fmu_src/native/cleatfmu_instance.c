@@ -10,14 +10,14 @@
 #define STATE_MAGIC "CLEATFMU"
 #define KIND_BYTES 32
 /* Serialized state: magic, kind (32 bytes), header (4 bytes LE: number of values | unchecked << 16),
- * time, values (native little-endian doubles). */
-#define SERIALIZED_SIZE (8 + KIND_BYTES + 4 + 8 * (1 + N_VARIABLES))
+ * time, values (the variables, then the hidden state; native little-endian doubles). */
+#define SERIALIZED_SIZE (8 + KIND_BYTES + 4 + 8 * (1 + N_VALUES))
 
 typedef struct {
     char magic[8];
     double time;
     int unchecked;
-    double values[N_VARIABLES];
+    double values[N_VALUES];
 } Snapshot;
 
 int ci_load(CleatfmuInstance *s, const char *token, const char *resource_location, char *msg, size_t n) {
@@ -82,7 +82,7 @@ static int update(CleatfmuInstance *s) {
     char msg[CLEATFMU_MESSAGE_SIZE];
     if (!s->stale) return CI_OK;
     if (ci_check_parameters(s) != CI_OK) return CI_ERROR;
-    if (cleatfmu_evaluate(s->values, msg, sizeof msg)) return ci_fail(s, "%s", msg);
+    if (cleatfmu_evaluate(s->values, s->time, msg, sizeof msg)) return ci_fail(s, "%s", msg);
     s->stale = 0;
     return CI_OK;
 }
@@ -130,6 +130,10 @@ int ci_set(CleatfmuInstance *s, const char *function, CleatfmuVarType type, cons
             || cleatfmu_variables[vr[i]].causality == VC_OUTPUT)
             return ci_fail(s, "%s: value reference %u is not a %s input or parameter", function, vr[i],
                            type_name(type));
+        if (MODEL_FIXED_PARAMETERS && cleatfmu_variables[vr[i]].causality == VC_PARAMETER
+            && !(s->mode & (CI_INSTANTIATED | CI_INITIALIZATION)))
+            return ci_fail(s, "%s: %s is a fixed parameter, settable only before initialization ends", function,
+                           cleatfmu_variables[vr[i]].name);
         if (type == VT_BOOLEAN && get_flag(flags, i) < 0)
             return ci_fail(s, "%s: %s: must be a Boolean: rejected", function, cleatfmu_variables[vr[i]].name);
         value = type == VT_REAL ? reals[i] : (double)get_flag(flags, i);
@@ -148,6 +152,11 @@ int ci_do_step(CleatfmuInstance *s, const char *function, double current, double
     if (!(step >= 0.0) || !isfinite(current) || !isfinite(step))
         return ci_fail(s, "%s: invalid communication point %.17g or step size %.17g", function, current, step);
     if (ci_check_parameters(s) != CI_OK) return CI_ERROR;
+    if (N_STATES > 0) {
+        char msg[CLEATFMU_MESSAGE_SIZE];
+        if (cleatfmu_step(s->values, current, step, msg, sizeof msg)) return ci_fail(s, "%s: %s", function, msg);
+        s->stale = 1;
+    }
     s->time = current + step;
     return CI_OK;
 }
@@ -214,10 +223,10 @@ int ci_serialize(CleatfmuInstance *s, const char *function, const void *state, u
     kind_bytes(kind);
     memcpy(buffer, STATE_MAGIC, 8);
     memcpy(buffer + 8, kind, KIND_BYTES);
-    header = (unsigned long)N_VARIABLES | (snap->unchecked ? 0x10000UL : 0UL);
+    header = (unsigned long)N_VALUES | (snap->unchecked ? 0x10000UL : 0UL);
     for (i = 0; i < 4; i++) buffer[8 + KIND_BYTES + i] = (unsigned char)((header >> (8 * i)) & 0xffUL);
     memcpy(buffer + 12 + KIND_BYTES, &snap->time, 8);
-    memcpy(buffer + 20 + KIND_BYTES, snap->values, 8 * N_VARIABLES);
+    memcpy(buffer + 20 + KIND_BYTES, snap->values, 8 * N_VALUES);
     return CI_OK;
 }
 
@@ -233,13 +242,13 @@ int ci_deserialize(CleatfmuInstance *s, const char *function, const unsigned cha
     if (buffer != NULL && size == SERIALIZED_SIZE)
         for (i = 3; i >= 0; i--) header = (header << 8) | buffer[8 + KIND_BYTES + i];
     if (buffer == NULL || state == NULL || size != SERIALIZED_SIZE || memcmp(buffer, STATE_MAGIC, 8) != 0
-        || memcmp(buffer + 8, kind, KIND_BYTES) != 0 || (header & 0xffffUL) != N_VARIABLES)
+        || memcmp(buffer + 8, kind, KIND_BYTES) != 0 || (header & 0xffffUL) != N_VALUES)
         return ci_fail(s, "%s: not a serialized state of FMU kind %s", function, MODEL_KIND);
     if (*state != NULL && !is_snapshot(*state)) return ci_fail(s, "%s: not an FMU state of this FMU", function);
     memcpy(tmp.magic, STATE_MAGIC, 8);
     tmp.unchecked = (header & 0x10000UL) != 0;
     memcpy(&tmp.time, buffer + 12 + KIND_BYTES, 8);
-    memcpy(tmp.values, buffer + 20 + KIND_BYTES, 8 * N_VARIABLES);
+    memcpy(tmp.values, buffer + 20 + KIND_BYTES, 8 * N_VALUES);
     for (vr = 0; vr < N_VARIABLES; vr++)
         if (cleatfmu_variables[vr].causality != VC_OUTPUT && cleatfmu_value_problem(vr, tmp.values[vr], msg, sizeof msg))
             return ci_fail(s, "%s: %s", function, msg);

@@ -43,8 +43,8 @@ typedef struct CleatfmuInstance {
     CleatfmuMode mode;
     double time;
     int stale, unchecked;
-    double values[N_VARIABLES];
-    double start[N_VARIABLES];
+    double values[N_VALUES];       /* the variables, then the hidden state */
+    double start[N_VALUES];
     char token[CLEATFMU_GUID_SIZE];
 } CleatfmuInstance;
 

@@ -3,8 +3,10 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "cleatfmu_law.h"
 #include "cleatfmu_model.h"
+#if !MODEL_BODY
+#include "cleatfmu_law.h"
+#endif
 
 const CleatfmuVariable cleatfmu_variables[N_VARIABLES] = {MODEL_VARIABLES};
 
@@ -54,6 +56,13 @@ int cleatfmu_set_problem(const double *values, char *msg, size_t n) {
     for (vr = 0; vr < N_VARIABLES; vr++)
         if (cleatfmu_variables[vr].causality != VC_OUTPUT && cleatfmu_value_problem(vr, values[vr], msg, n))
             return 1;
+#if MODEL_BODY
+    if (values[VR_FRONT_AXLE_PIVOT] != 0.0 && !(values[VR_PITCH_COUPLING] != 0.0 && values[VR_ROLL_COUPLING] != 0.0)) {
+        snprintf(msg, n, "a pivoting front axle (front_axle_pivot) needs the whole tractor (pitch_coupling and "
+                         "roll_coupling)");
+        return 1;
+    }
+#endif
 #if MODEL_EXTENDED
     if (values[VR_STIFFNESS_EXPONENT] != 1.0 && !(values[VR_STATIC_LOAD] > 0.0)) {
         snprintf(msg, n, "static_load must be > 0 N when stiffness_exponent != 1");
@@ -63,9 +72,48 @@ int cleatfmu_set_problem(const double *values, char *msg, size_t n) {
     return 0;
 }
 
-int cleatfmu_evaluate(double *v, char *msg, size_t n) {
-    CleatfmuTireResult r;
+#if MODEL_BODY
+#include "cleatfmu_body.h"
+#endif
+
+static int outputs_finite(const double *v, char *msg, size_t n) {
     size_t vr;
+    for (vr = 0; vr < N_VARIABLES; vr++) {
+        if (cleatfmu_variables[vr].causality == VC_OUTPUT && !isfinite(v[vr])) {
+            snprintf(msg, n, "the outputs cannot be evaluated for these inputs and parameters (%s = %.17g)",
+                     cleatfmu_variables[vr].name, v[vr]);
+            return 1;
+        }
+    }
+    return 0;
+}
+
+#if MODEL_BODY
+int cleatfmu_evaluate(double *v, double time, char *msg, size_t n) {
+    cleatfmu_body_outputs(v, time);
+    return outputs_finite(v, msg, n);
+}
+
+int cleatfmu_step(double *v, double time, double step, char *msg, size_t n) {
+    size_t i;
+    cleatfmu_body_step(v, step);
+    for (i = N_VARIABLES; i < N_VALUES; i++) {
+        if (!isfinite(v[i])) {
+            snprintf(msg, n, "the body's motion diverged at t = %.17g s (non-finite state)", time + step);
+            return 1;
+        }
+    }
+    return 0;
+}
+#else
+int cleatfmu_step(double *v, double time, double step, char *msg, size_t n) {
+    (void)v; (void)time; (void)step; (void)msg; (void)n;
+    return 0;
+}
+
+int cleatfmu_evaluate(double *v, double time, char *msg, size_t n) {
+    CleatfmuTireResult r;
+    (void)time;
 #if MODEL_EXTENDED
     CleatfmuTireParameters p;
     p.stiffness = v[VR_STIFFNESS];
@@ -95,12 +143,6 @@ int cleatfmu_evaluate(double *v, char *msg, size_t n) {
     v[VR_DEFLECTION] = r.deflection;
     v[VR_DEFLECTION_RATE] = r.deflection_rate;
     v[VR_IN_CONTACT] = r.contact ? 1.0 : 0.0;
-    for (vr = 0; vr < N_VARIABLES; vr++) {
-        if (cleatfmu_variables[vr].causality == VC_OUTPUT && !isfinite(v[vr])) {
-            snprintf(msg, n, "the outputs cannot be evaluated for these inputs and parameters (%s = %.17g)",
-                     cleatfmu_variables[vr].name, v[vr]);
-            return 1;
-        }
-    }
-    return 0;
+    return outputs_finite(v, msg, n);
 }
+#endif

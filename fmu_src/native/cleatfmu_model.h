@@ -1,8 +1,10 @@
 /* The model of a cleatfmu tire FMU, independent of the FMI version.
  *
  * Every variable's value is a double in values[value reference] (a Boolean is
- * 0.0 or 1.0).  The kind's config.h defines MODEL_IDENTIFIER, MODEL_KIND,
- * N_VARIABLES, the VR_* value references and the variable table.
+ * 0.0 or 1.0); a kind with a state (the body) keeps it hidden in N_STATES more
+ * doubles after the variables.  The kind's config.h defines MODEL_IDENTIFIER,
+ * MODEL_KIND, N_VARIABLES, the VR_* value references and the variable table
+ * (and optionally MODEL_BODY, N_STATES, MODEL_FIXED_PARAMETERS).
  */
 #ifndef CLEATFMU_MODEL_H
 #define CLEATFMU_MODEL_H
@@ -24,6 +26,18 @@ typedef struct {
 
 #include "config.h"
 
+#ifndef MODEL_BODY
+#define MODEL_BODY 0
+#endif
+#ifndef N_STATES
+#define N_STATES 0
+#endif
+#ifndef MODEL_FIXED_PARAMETERS
+#define MODEL_FIXED_PARAMETERS 0
+#endif
+/* Number of doubles of an instance's values: the variables, then the hidden state. */
+#define N_VALUES (N_VARIABLES + N_STATES)
+
 #define CLEATFMU_STR_(x) #x
 #define CLEATFMU_STR(x) CLEATFMU_STR_(x)
 #define MODEL_IDENTIFIER_STRING CLEATFMU_STR(MODEL_IDENTIFIER)
@@ -35,8 +49,11 @@ extern const CleatfmuVariable cleatfmu_variables[N_VARIABLES];
 int cleatfmu_value_problem(size_t vr, double value, char *msg, size_t n);
 /* Why a complete set of values is invalid together (message into msg), or 0. */
 int cleatfmu_set_problem(const double *values, char *msg, size_t n);
-/* Compute the outputs into values; nonzero (message into msg) when an output is not finite. */
-int cleatfmu_evaluate(double *values, char *msg, size_t n);
+/* Compute the outputs into values at `time`; nonzero (message into msg) when an output is not finite. */
+int cleatfmu_evaluate(double *values, double time, char *msg, size_t n);
+/* Advance the hidden state over the step [time, time + step] (nothing for a stateless kind);
+ * nonzero (message into msg) when the state becomes non-finite. */
+int cleatfmu_step(double *values, double time, double step, char *msg, size_t n);
 /* Value reference of the variable called `name`, or -1. */
 int cleatfmu_find_variable(const char *name);
 
