@@ -31,7 +31,7 @@ from .diagnose.joint_fit import UNEXPLAINED_RATIO
 from .errors import InputError
 from .model import Cleat, TractorModel
 from .model.stepping import edge_jumps, step_lists, trajectory_from_arrays
-from .preprocess import DEFAULT_CUTOFF_HZ, lowpass
+from .preprocess import DEFAULT_CUTOFF_HZ
 from .recording import TIRES
 from .scheme import Trajectory, _equilibrium_corner
 from .simulate_inputs import body_settings, read_body_document, tractor_fmu_paths

@@ -146,3 +146,21 @@ def test_static_set_from_a_compression_test_file(tmp_path):
     assert _stiffness(f"static={path}") == pytest.approx(295.08e3, rel=1e-9)
     with pytest.raises(Exception, match="compression test's CSV"):
         _stiffness(f"static={tmp_path / 'missing.csv'}")
+
+
+def test_fmu_set_takes_k_and_c_from_the_four_tire_fmus(tmp_path):
+    """fmu=DIR: the stiffness and damping the exported tire FMUs carry (their start values), per tire."""
+    from build_scripts import build_fmu
+    from identification.comfort.ride import _fmu_set, check_set_names
+    from identification.errors import InputError
+
+    values = {"FL": (431e3, 2100.0), "FR": (447e3, 2300.0), "RL": (512e3, 3900.0), "RR": (530e3, 4100.0)}
+    for t, (k, c) in values.items():
+        build_fmu("point_contact", tmp_path / f"day_{t}.fmu", backend="native", platforms=["linux64"],
+                  start_values={"stiffness": k, "damping": c})
+    assert check_set_names([f"fmu={tmp_path}", "final"]) == [f"fmu={tmp_path}", "final"]
+    k, c = _fmu_set(f"fmu={tmp_path}")
+    assert k == {t: v[0] for t, v in values.items()} and c == {t: v[1] for t, v in values.items()}
+    (tmp_path / "day_RR.fmu").unlink()
+    with pytest.raises(InputError, match=r"\*_RR\.fmu"):
+        check_set_names([f"fmu={tmp_path}"])

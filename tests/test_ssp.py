@@ -3,7 +3,6 @@ C master without Python, against the project's master and against the linear sys
 
 from __future__ import annotations
 
-import math
 import zipfile
 
 import numpy as np

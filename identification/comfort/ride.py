@@ -230,7 +230,7 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
     names : iterable of str
         ``final`` (the joint diagnosis's named model), ``paper`` (the paper's method per tire),
         ``waveform`` (the waveform fit per tire), ``static=K`` (every tire at K N/m, e.g. a compression
-        test's, with the final model's c).
+        test's, with the final model's c), ``fmu=DIR`` (the k and c the four tire FMUs in DIR carry).
     diagnosis : TractorDiagnosis, optional
         The recording's joint diagnosis (run when not given).
     workers : int
@@ -263,6 +263,8 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
     for name in names:
         if name == "final":
             sets[name] = final
+        elif name.startswith("fmu="):
+            sets[name] = _fmu_set(name)
         elif name in ("paper", "waveform"):
             if name == "paper":
                 from ..identify import identify as method
@@ -286,9 +288,34 @@ def check_set_names(names) -> list:
     for name in names:
         if name.startswith("static="):
             _stiffness(name)
+        elif name.startswith("fmu="):
+            _fmu_set(name)
         elif name not in ("paper", "waveform", "final"):
-            raise InputError("--compare", f"unknown parameter set {name!r} (paper, waveform, final, static=K)")
+            raise InputError("--compare", f"unknown parameter set {name!r} (paper, waveform, final, static=K, "
+                                          f"fmu=DIR)")
     return names
+
+
+def _fmu_set(name: str) -> tuple:
+    """(k, c) per tire of ``fmu=DIR``: the stiffness and damping the four tire FMUs in DIR carry (their
+    start values, as exported or written by ``diagnose --fmu-dir``)."""
+    from fmpy import read_model_description
+
+    from ..recording import TIRES
+    from ..simulate_inputs import tractor_fmu_paths
+
+    folder = name.split("=", 1)[1]
+    paths = tractor_fmu_paths(folder)
+    k, c = {}, {}
+    for t in TIRES:
+        try:
+            starts = {v.name: v.start for v in read_model_description(str(paths[t])).modelVariables}
+            k[t], c[t] = float(starts["stiffness"]), float(starts["damping"])
+        except Exception as exc:   # not an FMU, or not a tire FMU
+            raise InputError(paths[t], f"not a cleatfmu tire FMU with stiffness and damping ({exc})") from None
+        if not (math.isfinite(k[t]) and 1e4 <= k[t] <= 1e8 and math.isfinite(c[t]) and c[t] >= 0):
+            raise InputError(paths[t], f"stiffness {k[t]:g} N/m, damping {c[t]:g} N s/m: not a tire's")
+    return k, c
 
 
 def _stiffness(name: str) -> float:
