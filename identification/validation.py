@@ -46,12 +46,14 @@ from .identify import identify_paper
 from .preprocess import DEFAULT_CUTOFF_HZ, TireSignal, filter_guard_s, lowpass, preprocess
 from .recording import FRONT_TIRES, Recording
 
-__all__ = ["DEFAULT_MAX_STEP_S", "Window", "Comparison", "simulate_recording", "box_average", "filtered_on_grid"]
+__all__ = ["DEFAULT_MAX_STEP_S", "MAX_ALIGNMENT_S", "Window", "Comparison", "simulate_recording", "box_average", "filtered_on_grid"]
 
 #: Default largest communication step of the co-simulation, s.
 DEFAULT_MAX_STEP_S = 2.5e-4
 _LEAD_S = 0.05
 _MAX_SHIFT_S = 0.03
+#: Search limit of the (sub-sample) alignment of the simulated to the measured acceleration, s.
+MAX_ALIGNMENT_S = _MAX_SHIFT_S
 
 
 @dataclass(frozen=True)
@@ -98,13 +100,31 @@ class Comparison:
     extra: dict = field(default_factory=dict)
 
     @property
+    def alignment_at_limit(self) -> bool:
+        """The alignment reached its search limit (±:data:`MAX_ALIGNMENT_S`): the best shift may lie beyond it,
+        so the simulated impact is out of phase with the measured one and the NRMSE overstates the misfit of
+        the tire model (the arrival or the speed is off)."""
+        return abs(self.alignment_s) >= MAX_ALIGNMENT_S - 1e-4
+
+    @property
+    def warnings(self) -> list:
+        """Plain-language warnings about this comparison."""
+        if self.alignment_at_limit:
+            return [f"the alignment of simulated to measured acceleration reached its search limit "
+                    f"({self.alignment_s * 1e3:+.1f} ms of ±{MAX_ALIGNMENT_S * 1e3:.0f} ms): the simulated impact "
+                    f"is out of phase with the measured one (check the impact time and the speed)"]
+        return []
+
+    @property
     def worst_window(self) -> str:
         """The window holding the largest share of the misfit beyond noise."""
         return max(self.windows, key=lambda n: self.windows[n].misfit_share)
 
     def to_json(self) -> dict:
         """The ``simulate --json`` document."""
-        return {"tire": self.tire, "nrmse": self.nrmse, "r2": self.r2, "k_fmu": self.k_fmu, "c_fmu": self.c_fmu,
+        return {"tire": self.tire, "nrmse": self.nrmse, "r2": self.r2, "alignment_s": self.alignment_s,
+                "alignment_at_limit": self.alignment_at_limit, "warnings": self.warnings,
+                "k_fmu": self.k_fmu, "c_fmu": self.c_fmu,
                 "k_reidentified": self.k_reidentified, "c_reidentified": self.c_reidentified,
                 "decay_rate_measured": self.decay_rate_measured, "decay_rate_simulated": self.decay_rate_simulated,
                 "windows": {name: w.to_json() for name, w in self.windows.items()}}

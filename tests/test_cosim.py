@@ -127,6 +127,18 @@ def test_closed_loop_on_rig_baseline(cli, tmp_path, baseline_runs, speed, tire):
     assert doc["c_fmu"] == pytest.approx(exported["c"], rel=1e-12)
 
 
+def test_an_alignment_at_its_search_limit_is_reported_as_a_warning(tire_fmu, baseline_runs):
+    from dataclasses import replace
+
+    from identification.validation import MAX_ALIGNMENT_S
+
+    cmp = simulate_recording(tire_fmu, baseline_runs[7.0].recording, "FL")
+    assert not cmp.alignment_at_limit and cmp.warnings == []
+    stuck = replace(cmp, alignment_s=MAX_ALIGNMENT_S)
+    assert stuck.alignment_at_limit and "search limit" in stuck.warnings[0] and "+30.0 ms" in stuck.warnings[0]
+    assert stuck.to_json()["alignment_at_limit"] is True
+
+
 @pytest.mark.parametrize("method", ["paper", "waveform"])
 def test_closure_reidentifies_the_fmu(tire_fmu, baseline_runs, method):
     rec = baseline_runs[7.0].recording
@@ -142,8 +154,10 @@ def test_simulate_json_shape_and_plot(cli, tmp_path, tire_fmu, baseline_runs):
     res = cli("simulate", tire_fmu, csv_path, "--tire", "FL", "--json", "--plot", tmp_path / "fl.png")
     assert res.code == 0, res.err
     doc = json.loads(res.out)
-    assert set(doc) == {"tire", "nrmse", "r2", "k_fmu", "c_fmu", "k_reidentified", "c_reidentified",
-                        "decay_rate_measured", "decay_rate_simulated", "windows"}
+    assert set(doc) == {"tire", "nrmse", "r2", "alignment_s", "alignment_at_limit", "warnings", "k_fmu", "c_fmu",
+                        "k_reidentified", "c_reidentified", "decay_rate_measured", "decay_rate_simulated", "windows"}
+    # the rig's tire in the FMU: aligned within a few ms, far from the search limit, no warning
+    assert abs(doc["alignment_s"]) < 0.01 and not doc["alignment_at_limit"] and doc["warnings"] == []
     assert doc["tire"] == "FL"
     assert set(doc["windows"]) == {"impact", "free_decay", "other_axle"}
     for w in doc["windows"].values():
