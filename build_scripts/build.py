@@ -210,7 +210,7 @@ BACKENDS = ("pythonfmu", "native")
 
 def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: dict | None = None,
               description: str | None = None, backend: str = "pythonfmu", fmi_version: int = 2,
-              platforms=None) -> Path:
+              platforms=None, resources: dict | None = None) -> Path:
     """Build an FMU of `kind` whose inputs and parameters start at `start_values`.
 
     Parameters
@@ -238,6 +238,9 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
         FMI version of a native FMU (2).
     platforms : iterable of str, optional
         Platforms of a native FMU (default: all, see :data:`build_scripts.native.PLATFORMS`).
+    resources : dict of str to bytes, optional
+        Further files of a native FMU's resources folder: the ``road_profile`` kind's table
+        (:data:`build_scripts.road_table.ROAD_FILE`; default :func:`build_scripts.road_table.default_road`).
 
     Returns
     -------
@@ -262,7 +265,10 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
         raise ValueError(f"FMU kind {k.name} has no {backend} backend (it has: {', '.join(k.backends)})")
     starts = resolve_start_values(k, start_values)
     if backend == "native":
-        return _build_native(k, dest, starts, start_values or {}, provenance, description, fmi_version, platforms)
+        return _build_native(k, dest, starts, start_values or {}, provenance, description, fmi_version, platforms,
+                             resources)
+    if resources:
+        raise ValueError("resources are for native FMUs (the pythonfmu backend takes none)")
     fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=".fmu.part", dir=dest.parent)
     os.close(fd)
     tmp = Path(tmp_name)
@@ -289,13 +295,24 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
     return dest
 
 
-def _build_native(k, dest: Path, starts, given, provenance, description, fmi_version, platforms) -> Path:
+def _build_native(k, dest: Path, starts, given, provenance, description, fmi_version, platforms,
+                  resources=None) -> Path:
     from identification.tire_law import extended_parameter_problem, parameter_problem
 
     from .native_fmu import equilibrium_starts, native_fmu_bytes
 
     law = {n: starts[n] for n in k.names("parameter")}
-    if "stiffness" not in law:            # the body
+    resources = dict(resources or {})
+    if "ramp_length" in law:              # the road
+        from .road_table import ROAD_FILE, default_road, road_table_bytes
+
+        if set(resources) - {ROAD_FILE}:
+            raise ValueError(f"FMU kind {k.name}: the only resource is {ROAD_FILE}")
+        resources.setdefault(ROAD_FILE, road_table_bytes(*default_road()))
+        problem = None
+    elif resources:
+        raise ValueError(f"FMU kind {k.name} takes no resources")
+    elif "stiffness" not in law:          # the body
         problem = _body_problem(law)
     else:
         problem = (extended_parameter_problem(law) if "static_load" in law
@@ -307,7 +324,7 @@ def _build_native(k, dest: Path, starts, given, provenance, description, fmi_ver
     if description is None:
         description = k.native.get("description") or f"cleatfmu {k.name} tire (native C), SI units"
     data = native_fmu_bytes(k, starts, description=description, version=project_version(), fmi_version=fmi_version,
-                            platforms=platforms, provenance=provenance)
+                            platforms=platforms, provenance=provenance, resources=resources)
     fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=".fmu.part", dir=dest.parent)
     tmp = Path(tmp_name)
     try:

@@ -120,7 +120,7 @@ def _kind_for_native(kind: FmuKind) -> FmuKind:
 
 
 def native_fmu_bytes(kind: FmuKind, starts: dict, *, description: str, version: str, fmi_version: int = 2,
-                     platforms=None, provenance: dict | None = None) -> bytes:
+                     platforms=None, provenance: dict | None = None, resources: dict | None = None) -> bytes:
     """The complete .fmu file (bytes) of a native FMU of `kind` with start values `starts`.
 
     Parameters
@@ -137,6 +137,8 @@ def native_fmu_bytes(kind: FmuKind, starts: dict, *, description: str, version: 
         Platform folders (default: all of :data:`build_scripts.native.PLATFORMS`).
     provenance : dict, optional
         Written to ``resources/provenance.json``.
+    resources : dict of str to bytes, optional
+        Further files of the resources folder (the road's profile table).
     """
     if fmi_version not in PLATFORMS:
         raise ValueError(f"FMI version {fmi_version} is not supported by the native backend "
@@ -155,6 +157,8 @@ def native_fmu_bytes(kind: FmuKind, starts: dict, *, description: str, version: 
         files[f"binaries/{platform}/{kind.model_identifier}{ext}"] = data
     for name, data in source_files(kind, fmi_version).items():
         files[f"sources/{name}"] = data
+    for name, data in (resources or {}).items():
+        files[f"resources/{name}"] = data
     if provenance:
         files["resources/provenance.json"] = (json.dumps(provenance, indent=2, sort_keys=True) + "\n").encode()
     generation_tool = f"cleatfmu {version} build_scripts (native C, zig cc)"

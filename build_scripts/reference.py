@@ -201,13 +201,38 @@ def _tractor_body_closed_form(inputs: dict, starts: dict) -> dict:
     return out
 
 
+def _no_inputs(t: np.ndarray, starts: dict) -> dict:
+    return {}
+
+
+def _road_profile_closed_form(inputs: dict, starts: dict) -> dict:
+    """The default profile (:func:`build_scripts.road_table.default_road`) under each tire: linear
+    interpolation of the heights and of their ``numpy.gradient`` slopes, faded in by a smoothstep."""
+    from .road_table import default_road
+
+    x_road, left, right = default_road()
+    t = inputs["time"]
+    out = {}
+    for i, tire in enumerate(("FL", "FR", "RL", "RR")):
+        track = left if tire in ("FL", "RL") else right
+        x = starts["start_x"] + starts["speed"] * t - (starts["wheelbase"] if i >= 2 else 0.0)
+        h = np.interp(x, x_road, track, left=0.0, right=0.0)
+        dh = np.interp(x, x_road, np.gradient(track, x_road), left=0.0, right=0.0)
+        s = np.clip((x - x_road[0]) / starts["ramp_length"], 0.0, 1.0)
+        fade = s * s * (3.0 - 2.0 * s)
+        dfade = np.where((s > 0) & (s < 1), 6.0 * s * (1.0 - s) / starts["ramp_length"], 0.0)
+        out[f"road_z_{tire}"] = fade * h
+        out[f"road_vz_{tire}"] = starts["speed"] * (fade * dh + dfade * h)
+    return out
+
+
 #: kind -> function(t, start values) returning the input signals of its default experiment.
 INPUT_SIGNALS = {"point_contact": _point_contact_cleat_run, "extended_tire": _extended_tire_cleat_run,
-                 "tractor_body": _tractor_body_forces}
+                 "tractor_body": _tractor_body_forces, "road_profile": _no_inputs}
 #: kind -> function(inputs, start values) returning its outputs in closed form (``inputs["time"]``: the
 #: time of each output row).
 CLOSED_FORM = {"point_contact": _point_contact_closed_form, "extended_tire": _extended_tire_closed_form,
-               "tractor_body": _tractor_body_closed_form}
+               "tractor_body": _tractor_body_closed_form, "road_profile": _road_profile_closed_form}
 
 
 def reference_path(kind) -> Path:

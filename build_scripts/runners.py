@@ -207,12 +207,13 @@ def run_libcosim(fmu, signals: dict, outputs: list[str], *, start_values: dict |
     execution.add_manipulator(manipulator)
     out = {n: np.empty(t.size - 1, dtype=bool if n in bools else float) for n in outputs}
     for k in range(t.size - 1):
-        manipulator.slave_real_values(index, in_vrs, [float(signals[n][k]) for n in inputs])
+        if in_vrs:   # (a kind without inputs: nothing to override)
+            manipulator.slave_real_values(index, in_vrs, [float(signals[n][k]) for n in inputs])
         if not execution.step() or execution.status().state == CosimExecutionState.ERROR.value:
             raise RuntimeError(f"libcosim step {k} of {fmu} failed: {execution.status()}")
         for n, v in zip(reals, observer.last_real_values(index, [refs[n][0] for n in reals])):
             out[n][k] = v
-        for n, v in zip(bools, observer.last_boolean_values(index, [refs[n][0] for n in bools])):
+        for n, v in zip(bools, observer.last_boolean_values(index, [refs[n][0] for n in bools]) if bools else ()):
             out[n][k] = bool(v)
     out["time"] = t[1:]
     return out

@@ -10,7 +10,11 @@ the rigid or pivoting-front-axle tractor) as ``NAME.ssp``, a zip of
   roll; or half tractors, or corners) on the four tire forces, hub heights,
   velocities and longitudinal positions out, hub and seat accelerations;
 * ``resources/FL.fmu`` ... ``RR.fmu`` - one native extended tire FMU per wheel,
-  its built-in cleat placed in the system's road coordinates.
+  its built-in cleat placed in the system's road coordinates;
+* for a ride (:class:`identification.comfort.ride.RideModel`) ``resources/road.fmu``
+  - the road profile (FMU kind ``road_profile``, native C, its table in its
+  resources): the road height and rate under each tire, connected to the
+  tires' ``road_z`` and ``road_vz``.
 
 Connections: ``body.hub_z_<T> -> T.hub_z``, ``body.hub_vz_<T> -> T.hub_vz``,
 ``body.hub_x_<T> -> T.hub_x``, ``body.hub_vx -> T.hub_vx`` and ``T.force_z -> body.force_<T>``.
@@ -37,9 +41,10 @@ import numpy as np
 from .model import TractorModel
 from .recording import FRONT_TIRES, TIRES
 
-__all__ = ["SystemLayout", "system_layout", "body_seat_row", "write_tractor_ssp", "BODY", "SSD_NAME", "CONNECTIONS"]
+__all__ = ["ROAD", "SystemLayout", "system_layout", "body_seat_row", "write_tractor_ssp", "BODY", "SSD_NAME", "CONNECTIONS"]
 
 BODY = "body"
+ROAD = "road"
 SSD_NAME = "SystemStructure.ssd"
 _NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
        "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon"}
@@ -54,6 +59,8 @@ class SystemLayout:
 
     body: dict                 # tractor_body start values
     tires: dict                # tire -> extended_tire start values
+    road: dict | None          # road_profile start values (a ride's road profile), or None (a cleat run)
+    road_table: bytes | None   # the road_profile FMU's profile table
     static_hub_z: np.ndarray   # m, per tire (the record's closed form at the start)
     start_s: float
 
@@ -84,9 +91,6 @@ def system_layout(record: TractorModel, *, start_s: float, seat_x_m: float, seat
     body = record.body
     if tuple(body.tires) != TIRES:
         raise ValueError(f"the FMU system needs the four tires {', '.join(TIRES)}; got {', '.join(body.tires)}")
-    if type(record) is not TractorModel:
-        raise ValueError(f"the FMU system runs the cleat record only, not a {type(record).__name__} "
-                         f"(its road is an input the system has no FMU for)")
     for i, t in enumerate(record.tires):
         if record.cleat.height_m > 0.0 and not record.builtin_cleat(i):
             raise ValueError(f"tire {t} sees the cleat as a road input (point contact); in the FMU system every "
@@ -121,8 +125,17 @@ def system_layout(record: TractorModel, *, start_s: float, seat_x_m: float, seat
         p["hub_vx"] = v
         p["hub_z"] = float(static_z[TIRES.index(t)])
         tires[t] = p
-    return SystemLayout(body=starts, tires=tires, static_hub_z=np.asarray(static_z, dtype=float),
-                        start_s=float(start_s))
+    road = table = None
+    if getattr(record, "road_x_m", None) is not None:          # a ride: the road profile is an FMU too
+        from build_scripts.road_table import road_table_bytes
+
+        from .comfort.ride import RAMP_M
+
+        road = {"speed": v, "start_x": float(record.road_x_m[0]), "wheelbase": float(max(record.offsets_m)),
+                "ramp_length": float(RAMP_M)}
+        table = road_table_bytes(record.road_x_m, record.road_left_m, record.road_right_m)
+    return SystemLayout(body=starts, tires=tires, road=road, road_table=table,
+                        static_hub_z=np.asarray(static_z, dtype=float), start_s=float(start_s))
 
 
 def body_seat_row(body, *, seat_x_m: float, seat_y: float = 0.0) -> np.ndarray:
@@ -181,12 +194,20 @@ def write_tractor_ssp(path, record: TractorModel, *, start_s: float, stop_s: flo
         body = build_fmu("tractor_body", Path(tmp, "body.fmu"), backend="native", start_values=layout.body,
                          description=f"Body of system '{name}': {_KIND_TEXT[record.body.kind]} (SI units)")
         files[f"resources/{BODY}.fmu"] = body.read_bytes()
+        if layout.road is not None:
+            from build_scripts.road_table import ROAD_FILE
+
+            road = build_fmu("road_profile", Path(tmp, f"{ROAD}.fmu"), backend="native", start_values=layout.road,
+                             resources={ROAD_FILE: layout.road_table},
+                             description=f"Road of system '{name}': two-track profile (SI units)")
+            files[f"resources/{ROAD}.fmu"] = road.read_bytes()
         for t, starts in layout.tires.items():
             fmu = build_fmu("extended_tire", Path(tmp, f"{t}.fmu"), backend="native", start_values=starts,
                             description=f"Tire {t} of system '{name}': extended tire, cleat in the system's road "
                                         f"coordinates (SI units)")
             files[f"resources/{t}.fmu"] = fmu.read_bytes()
-        files[SSD_NAME] = ssd_bytes(name, description, start_s=start_s, stop_s=stop_s, step_s=step_s)
+        files[SSD_NAME] = ssd_bytes(name, description, start_s=start_s, stop_s=stop_s, step_s=step_s,
+                                    road=layout.road is not None)
         staged = Path(tmp, path.name)
         staged.write_bytes(zip_bytes(files))
         publish_files({path: staged})
@@ -204,7 +225,7 @@ def _connector(parent, name: str, kind: str, unit: str | None) -> None:
 
 
 #: unit of each connector of the body and of a tire.
-_UNITS = {"hub_z": "m", "hub_vz": "m/s", "hub_x": "m", "hub_vx": "m/s", "force": "N", "force_z": "N",
+_UNITS = {"road_z": "m", "road_vz": "m/s", "hub_z": "m", "hub_vz": "m/s", "hub_x": "m", "hub_vx": "m/s", "force": "N", "force_z": "N",
           "hub_az": "m/s2", "seat_z": "m", "seat_az": "m/s2"}
 _BASE = {"m": {"m": "1"}, "m/s": {"m": "1", "s": "-1"}, "N": {"kg": "1", "m": "1", "s": "-2"},
          "m/s2": {"m": "1", "s": "-2"}}
@@ -215,8 +236,9 @@ def _unit(connector: str) -> str:
     return _UNITS[stem]
 
 
-def ssd_bytes(name: str, description: str, *, start_s: float, stop_s: float, step_s: float) -> bytes:
-    """``SystemStructure.ssd`` of the tractor system (SSP 1.0)."""
+def ssd_bytes(name: str, description: str, *, start_s: float, stop_s: float, step_s: float,
+              road: bool = False) -> bytes:
+    """``SystemStructure.ssd`` of the tractor system (SSP 1.0); with `road` the road FMU after the body."""
     for prefix, uri in _NS.items():
         ET.register_namespace(prefix, uri)
     d, c = _NS["ssd"], _NS["ssc"]
@@ -234,11 +256,17 @@ def ssd_bytes(name: str, description: str, *, start_s: float, stop_s: float, ste
         _connector(body_connectors, n, "input", _unit(n))
     for n in body_outputs:
         _connector(body_connectors, n, "output", _unit(n))
+    if road:
+        comp = ET.SubElement(elements, f"{{{d}}}Component", {"name": ROAD, "source": f"resources/{ROAD}.fmu",
+                                                            "type": "application/x-fmu-sharedlibrary"})
+        conns = ET.SubElement(comp, f"{{{d}}}Connectors")
+        for n in [f"{q}_{t}" for q in ("road_z", "road_vz") for t in TIRES]:
+            _connector(conns, n, "output", _unit(n))
     for t in TIRES:
         comp = ET.SubElement(elements, f"{{{d}}}Component", {"name": t, "source": f"resources/{t}.fmu",
                                                             "type": "application/x-fmu-sharedlibrary"})
         conns = ET.SubElement(comp, f"{{{d}}}Connectors")
-        for n in ("hub_z", "hub_vz", "hub_x", "hub_vx"):
+        for n in ("hub_z", "hub_vz", "hub_x", "hub_vx") + (("road_z", "road_vz") if road else ()):
             _connector(conns, n, "input", _unit(n))
         _connector(conns, "force_z", "output", "N")
     connections = ET.SubElement(system, f"{{{d}}}Connections")
@@ -249,6 +277,10 @@ def ssd_bytes(name: str, description: str, *, start_s: float, stop_s: float, ste
             ET.SubElement(connections, f"{{{d}}}Connection", {
                 "startElement": ends[0][0], "startConnector": ends[0][1],
                 "endElement": ends[1][0], "endConnector": ends[1][1]})
+        if road:
+            for q in ("road_z", "road_vz"):
+                ET.SubElement(connections, f"{{{d}}}Connection", {
+                    "startElement": ROAD, "startConnector": f"{q}_{t}", "endElement": t, "endConnector": q})
     units = ET.SubElement(root, f"{{{d}}}Units")
     for unit, exponents in _BASE.items():
         u = ET.SubElement(units, f"{{{c}}}Unit", {"name": unit})

@@ -170,3 +170,37 @@ def test_the_system_follows_the_exact_linear_response_of_the_tractor(tmp_path):
     assert got["seat_z"][0] == pytest.approx(q0[0] + (a - SEAT_X) * q0[1]
                                              - (LOADS[0] - LOADS[1] + LOADS[2] - LOADS[3]) / sum(LOADS) * q0[2],
                                              abs=1e-15)
+
+
+def test_the_ride_as_an_ssp_reproduces_the_seat_acceleration_of_ride(tmp_path):
+    """body + road profile FMU + four tires on an ISO 8608 road: the seat's acceleration in fmpy (sequential)
+    equals ``ride``'s (the compiled stepping) and libcosim's run equals the master with its exchange."""
+    from identification.comfort.ride import ride
+    from identification.comfort.ride_ssp import write_ride_ssps
+    from identification.comfort.road import road_profile
+    from identification.ssp_run import check_ssp
+
+    body = Body(TIRES, LOADS, WHEELBASE, pitch=True, roll=True, pitch_index=0.8, roll_index=0.5)
+    road = road_profile("C", SPEED * 9.0 + 1.0, 0.01, 3)
+    sets = {"final": ({"FL": 450e3, "FR": 470e3, "RL": 520e3, "RR": 540e3},
+                      {"FL": 3000.0, "FR": 3200.0, "RL": 4000.0, "RR": 4200.0})}
+    runs = ride(body, sets, road=road, speed_m_s=SPEED, duration_s=8.5, seat_x_m=SEAT_X, seat_y=0.2)
+    path = write_ride_ssps(tmp_path, body, sets, road=road, speed_m_s=SPEED, duration_s=8.5, seat_x_m=SEAT_X,
+                           seat_y=0.2)["final"]
+    components, connections, _ = read_system(path)
+    assert [c[0] for c in components] == ["body", "road", *TIRES]
+    assert ("road", "road_z_RL", "RL", "road_z") in connections and ("road", "road_vz_FR", "FR", "road_vz") in \
+        connections
+    got = run_ssp_fmpy(path, step_s=STEP)
+    run = runs["final"]
+    rows = np.searchsorted(got["time"], run.time_s - 1e-9)
+    assert np.allclose(got["time"][rows], run.time_s, atol=1e-9)
+    seat = got["seat_az"][rows]
+    assert np.std(run.seat_m_s2) > 0.1                     # the road shakes the seat
+    assert np.max(np.abs(seat - run.seat_m_s2)) < 1e-9 * np.ptp(run.seat_m_s2)
+    from identification.comfort.ride import _point_contact, ride_model
+    laws = [_point_contact(sets["final"][0][t], sets["final"][1][t], w) for t, w in zip(TIRES, LOADS)]
+    record = ride_model(body, laws, speed_m_s=SPEED, road_x_m=road.x_m, road_left_m=road.left_m,
+                        road_right_m=road.right_m)
+    check = check_ssp(path, record, start_s=0.0, step_s=STEP, stop_s=8.5, seat_x_m=SEAT_X, seat_y=0.2)
+    assert check["libcosim (parallel exchange)"] < 1e-9 and check["fmpy (parallel exchange)"] < 1e-9

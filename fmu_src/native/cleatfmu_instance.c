@@ -28,10 +28,18 @@ int ci_load(CleatfmuInstance *s, const char *token, const char *resource_locatio
         return 1;
     }
     if (cleatfmu_set_problem(s->values, msg, n)) return 1;
+    if (cleatfmu_load(resource_location, &s->data, msg, n)) return 1;
     memcpy(s->start, s->values, sizeof s->values);
     s->mode = CI_INSTANTIATED;
     s->stale = 1;
     return 0;
+}
+
+void ci_free(CleatfmuInstance *s) {
+    if (s == NULL) return;
+    cleatfmu_unload(s->data);
+    s->data = NULL;
+    s->free_memory(s);
 }
 
 int ci_fail(CleatfmuInstance *s, const char *fmt, ...) {
@@ -82,7 +90,7 @@ static int update(CleatfmuInstance *s) {
     char msg[CLEATFMU_MESSAGE_SIZE];
     if (!s->stale) return CI_OK;
     if (ci_check_parameters(s) != CI_OK) return CI_ERROR;
-    if (cleatfmu_evaluate(s->values, s->time, msg, sizeof msg)) return ci_fail(s, "%s", msg);
+    if (cleatfmu_evaluate(s->values, s->time, s->data, msg, sizeof msg)) return ci_fail(s, "%s", msg);
     s->stale = 0;
     return CI_OK;
 }
@@ -155,9 +163,9 @@ int ci_do_step(CleatfmuInstance *s, const char *function, double current, double
     if (N_STATES > 0) {
         char msg[CLEATFMU_MESSAGE_SIZE];
         if (cleatfmu_step(s->values, current, step, msg, sizeof msg)) return ci_fail(s, "%s: %s", function, msg);
-        s->stale = 1;
     }
     s->time = current + step;
+    s->stale = 1;                  /* outputs may follow the state or the clock */
     return CI_OK;
 }
 

@@ -46,11 +46,14 @@ typedef struct CleatfmuInstance {
     double values[N_VALUES];       /* the variables, then the hidden state */
     double start[N_VALUES];
     char token[CLEATFMU_GUID_SIZE];
+    void *data;                    /* the kind's data from the resources (the road's profile), or NULL */
 } CleatfmuInstance;
 
 /* Read the start values of the FMU at `resource_location` and check `token` against
  * the FMU's; fills s->values, s->start (returns 0) or msg (returns 1). */
 int ci_load(CleatfmuInstance *s, const char *token, const char *resource_location, char *msg, size_t n);
+/* Free the instance and the kind's data (cleatfmu_load). */
+void ci_free(CleatfmuInstance *s);
 /* Log a formatted error (category logStatusError) and return CI_ERROR. */
 int ci_fail(CleatfmuInstance *s, const char *fmt, ...);
 /* Is `s` an instance in one of `modes`?  Logs the call (logCalls) or the violation. */

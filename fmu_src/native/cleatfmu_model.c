@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "cleatfmu_model.h"
-#if !MODEL_BODY
+#if !MODEL_BODY && !MODEL_ROAD
 #include "cleatfmu_law.h"
 #endif
 
@@ -75,6 +75,9 @@ int cleatfmu_set_problem(const double *values, char *msg, size_t n) {
 #if MODEL_BODY
 #include "cleatfmu_body.h"
 #endif
+#if MODEL_ROAD
+#include "cleatfmu_road.h"
+#endif
 
 static int outputs_finite(const double *v, char *msg, size_t n) {
     size_t vr;
@@ -88,8 +91,25 @@ static int outputs_finite(const double *v, char *msg, size_t n) {
     return 0;
 }
 
+#if MODEL_ROAD
+int cleatfmu_load(const char *resource_location, void **data, char *msg, size_t n) {
+    return cleatfmu_road_load(resource_location, (CleatfmuRoad **)data, msg, n);
+}
+
+void cleatfmu_unload(void *data) { cleatfmu_road_free((CleatfmuRoad *)data); }
+#else
+int cleatfmu_load(const char *resource_location, void **data, char *msg, size_t n) {
+    (void)resource_location; (void)msg; (void)n;
+    *data = NULL;
+    return 0;
+}
+
+void cleatfmu_unload(void *data) { (void)data; }
+#endif
+
 #if MODEL_BODY
-int cleatfmu_evaluate(double *v, double time, char *msg, size_t n) {
+int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_t n) {
+    (void)data;
     cleatfmu_body_outputs(v, time);
     return outputs_finite(v, msg, n);
 }
@@ -111,9 +131,15 @@ int cleatfmu_step(double *v, double time, double step, char *msg, size_t n) {
     return 0;
 }
 
-int cleatfmu_evaluate(double *v, double time, char *msg, size_t n) {
+#if MODEL_ROAD
+int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_t n) {
+    cleatfmu_road_outputs(v, time, (const CleatfmuRoad *)data);
+    return outputs_finite(v, msg, n);
+}
+#else
+int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_t n) {
     CleatfmuTireResult r;
-    (void)time;
+    (void)time; (void)data;
 #if MODEL_EXTENDED
     CleatfmuTireParameters p;
     p.stiffness = v[VR_STIFFNESS];
@@ -145,4 +171,5 @@ int cleatfmu_evaluate(double *v, double time, char *msg, size_t n) {
     v[VR_IN_CONTACT] = r.contact ? 1.0 : 0.0;
     return outputs_finite(v, msg, n);
 }
+#endif
 #endif

@@ -107,8 +107,7 @@ static FILE *open_utf8(const char *path) {
 #endif
 }
 
-/* A double from the 16 hexadecimal digits of its IEEE 754 bits (locale-independent, exact). */
-static int parse_bits(const char *s, double *value) {
+int cleatfmu_parse_bits(const char *s, double *value, const char **end) {
     unsigned long long bits = 0;
     int i, d;
     for (i = 0; i < 16; i++) {
@@ -116,13 +115,19 @@ static int parse_bits(const char *s, double *value) {
         if (d < 0) return 1;
         bits = (bits << 4) | (unsigned long long)d;
     }
-    if (s[16] != '\0') return 1;
+    if (s[16] != '\0' && s[16] != ' ') return 1;
+    if (end != NULL) *end = s + 16;
     memcpy(value, &bits, sizeof *value);
     return 0;
 }
 
-/* Next line of buf from *pos (in place, NUL-terminated), or NULL at the end. */
-static char *next_line(char *buf, size_t size, size_t *pos) {
+/* A double from exactly the 16 hexadecimal digits of its IEEE 754 bits (locale-independent, exact). */
+static int parse_bits(const char *s, double *value) {
+    const char *end;
+    return cleatfmu_parse_bits(s, value, &end) || *end != '\0';
+}
+
+char *cleatfmu_next_line(char *buf, size_t size, size_t *pos) {
     char *line;
     if (*pos >= size) return NULL;
     line = buf + *pos;
@@ -132,42 +137,55 @@ static char *next_line(char *buf, size_t size, size_t *pos) {
     return line;
 }
 
-int cleatfmu_read_start_file(const char *resource_location, char guid[CLEATFMU_GUID_SIZE], double *values,
-                             char *msg, size_t msg_size) {
-    char path[MAX_PATH_BYTES], *buf, *line;
-    size_t size, pos = 0, n;
-    int seen[N_VARIABLES] = {0}, vr, status = 1;
+int cleatfmu_read_resource(const char *resource_location, const char *name, size_t max_bytes, char **buf,
+                           size_t *size, char *msg, size_t msg_size) {
+    char path[MAX_PATH_BYTES];
+    size_t n, len = strlen(name);
     FILE *f;
-    if (cleatfmu_uri_to_path(resource_location, path, sizeof path - sizeof CLEATFMU_START_FILE - 1, msg, msg_size))
+    *buf = NULL;
+    if (len + 2 >= sizeof path
+        || cleatfmu_uri_to_path(resource_location, path, sizeof path - len - 2, msg, msg_size))
         return 1;
     n = strlen(path);
     path[n] = '/';
-    memcpy(path + n + 1, CLEATFMU_START_FILE, sizeof CLEATFMU_START_FILE);
+    memcpy(path + n + 1, name, len + 1);
     f = open_utf8(path);
     if (f == NULL) {
         snprintf(msg, msg_size, "cannot open %.300s (resource location %.300s)", path, resource_location);
         return 1;
     }
-    buf = (char *)malloc(MAX_START_FILE + 1);
-    if (buf == NULL) {
+    *buf = (char *)malloc(max_bytes + 1);
+    if (*buf == NULL) {
         fclose(f);
         snprintf(msg, msg_size, "out of memory");
         return 1;
     }
-    size = fread(buf, 1, MAX_START_FILE + 1, f);
+    *size = fread(*buf, 1, max_bytes + 1, f);
     fclose(f);
-    buf[size > MAX_START_FILE ? MAX_START_FILE : size] = '\0';
-    guid[0] = '\0';
-    if (size > MAX_START_FILE) {
-        snprintf(msg, msg_size, "%s: larger than %d bytes", CLEATFMU_START_FILE, MAX_START_FILE);
-        goto done;
+    if (*size > max_bytes) {
+        free(*buf);
+        *buf = NULL;
+        snprintf(msg, msg_size, "%s: larger than %lu bytes", name, (unsigned long)max_bytes);
+        return 1;
     }
-    line = next_line(buf, size, &pos);
+    (*buf)[*size] = '\0';
+    return 0;
+}
+
+int cleatfmu_read_start_file(const char *resource_location, char guid[CLEATFMU_GUID_SIZE], double *values,
+                             char *msg, size_t msg_size) {
+    char *buf, *line;
+    size_t size, pos = 0;
+    int seen[N_VARIABLES] = {0}, vr, status = 1;
+    guid[0] = '\0';
+    if (cleatfmu_read_resource(resource_location, CLEATFMU_START_FILE, MAX_START_FILE, &buf, &size, msg, msg_size))
+        return 1;
+    line = cleatfmu_next_line(buf, size, &pos);
     if (line == NULL || strcmp(line, "cleatfmu-start 1 " MODEL_KIND) != 0) {
         snprintf(msg, msg_size, "%s: not a start-value file of FMU kind %s", CLEATFMU_START_FILE, MODEL_KIND);
         goto done;
     }
-    while ((line = next_line(buf, size, &pos)) != NULL) {
+    while ((line = cleatfmu_next_line(buf, size, &pos)) != NULL) {
         char *space = strchr(line, ' ');
         double value;
         if (line[0] == '\0' || line[0] == '#') continue;

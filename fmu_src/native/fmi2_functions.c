@@ -78,14 +78,15 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         s = (CleatfmuInstance *)calloc(1, sizeof *s);
         probe.free_memory = free;
     }
-    if (s == NULL) return NULL;
+    if (s == NULL) {
+        cleatfmu_unload(probe.data);
+        return NULL;
+    }
     memcpy(s, &probe, sizeof probe);
     return s;
 }
 
-void fmi2FreeInstance(fmi2Component c) {
-    if (c != NULL) S(c)->free_memory(c);
-}
+void fmi2FreeInstance(fmi2Component c) { ci_free(S(c)); }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {

@@ -70,15 +70,16 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     }
     probe.log_errors = loggingOn ? 1 : 0; /* nothing is logged unless the importer asks for it */
     s = (CleatfmuInstance *)calloc(1, sizeof *s);
-    if (s == NULL) return NULL;
+    if (s == NULL) {
+        cleatfmu_unload(probe.data);
+        return NULL;
+    }
     probe.free_memory = free;
     memcpy(s, &probe, sizeof probe);
     return s;
 }
 
-void fmi3FreeInstance(fmi3Instance instance) {
-    if (instance != NULL) S(instance)->free_memory(instance);
-}
+void fmi3FreeInstance(fmi3Instance instance) { ci_free(S(instance)); }
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {

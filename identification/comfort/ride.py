@@ -342,12 +342,14 @@ REPORT_RIDE = {"road_class": "B", "seed": 1, "duration_s": 60.0, "names": ("pape
 
 def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m_s: float | None = None,
                     duration_s: float = 60.0, seat_x_m: float | None = None, seat_y: float = 0.0,
-                    exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1) -> tuple:
+                    exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1, ssp_dir=None) -> tuple:
     """The recording's tractor on an ISO 8608 road with each parameter set: (runs, JSON document).
 
     Combines :func:`parameter_sets`, :func:`identification.comfort.road.road_profile` (grid ROAD_SPACING_M)
     and :func:`ride`; `speed_m_s` defaults to the recording's.  The document holds the road, the speed,
     the seat, the body and per set its k, c and rating (SI units), as ``cleatfmu ride --json`` prints it.
+    With `ssp_dir` every set's ride is also written there as an SSP 1.0 system of FMUs
+    (:func:`identification.comfort.ride_ssp.write_ride_ssps`; ``doc["ssp"]``).
     """
     from .road import road_profile
 
@@ -364,4 +366,9 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
            "body": {"kind": body.kind, "pitch_index": body.pitch_index, "roll_index": body.roll_index,
                     **({"pivot_index": body.pivot_index} if body.pivot else {}), "source": how},
            "sets": {name: r.to_json() for name, r in runs.items()}}
+    if ssp_dir is not None:
+        from .ride_ssp import write_ride_ssps
+        paths = write_ride_ssps(ssp_dir, body, sets, road=road, speed_m_s=speed, duration_s=duration_s,
+                                seat_x_m=seat_x, seat_y=seat_y)
+        doc["ssp"] = {name: str(p) for name, p in paths.items()}
     return runs, doc

@@ -47,6 +47,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="processes of the diagnosis (default: 2 or the CPU count)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.add_argument("--plot", metavar="OUT.png", help="write the seat's acceleration and a_w, VDV per set")
+    p.add_argument("--ssp", metavar="DIR", help="also write each set's ride as an SSP 1.0 system of native FMUs "
+                                                "(body, four tires, road profile): DIR/<set>.ssp")
     p.set_defaults(func=run)
 
 
@@ -76,6 +78,9 @@ def run(args) -> int:
 
     names = _check(args)
     check_output(args.plot, ".png", "plot")
+    if args.ssp is not None:
+        from ..cliutil import make_folders
+        make_folders(args.ssp)
     rec = _recording_arg(args)
     from .ride import ride_comparison
 
@@ -84,7 +89,7 @@ def run(args) -> int:
     runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
                                 speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
                                 duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
-                                exposure_h=args.exposure_h, workers=args.workers)
+                                exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp)
     speed, seat_x, how = doc["speed_m_s"], doc["seat"]["x_m"], doc["body"]["source"]
     if args.plot:
         from ..plots import plot_ride, save_png
@@ -101,5 +106,7 @@ def run(args) -> int:
             print(f"{name:<16}{ks:>24}{r.comfort.a_w:>10.3f}{r.comfort.vdv:>8.3f}{r.comfort.mtvv:>8.3f}{a8:>8.3f}")
         if args.plot:
             print(f"wrote {args.plot}")
+        for name, path in doc.get("ssp", {}).items():
+            print(f"wrote {path}: the ride with set {name} as an SSP 1.0 system of FMUs")
     return 0
 
