@@ -280,6 +280,10 @@ def child(spec: dict) -> dict:
 
 # -- parent: build, extract, one process per FMU and scenario ---------------------------------
 
+#: kind -> a parameter that must be > 0 (the failing call sets it to -1); default ``stiffness``.
+_POSITIVE_PARAMETER = {"tractor_body": "wheelbase", "road_profile": "ramp_length"}
+
+
 def _fmus(kind: str, folder: Path) -> dict:
     """``{label: spec}`` of the FMUs measured: built into `folder`, extracted, their libraries located."""
     import zipfile
@@ -287,11 +291,15 @@ def _fmus(kind: str, folder: Path) -> dict:
     from fmpy import read_model_description
 
     from build_scripts import build_fmu
+    from build_scripts.kinds import load_kind
 
+    backends = load_kind(kind).backends
     builds = {"native FMI 2.0": ("fmi2", dict(backend="native", platforms=["linux64"]), "linux64"),
               "native FMI 3.0": ("fmi3", dict(backend="native", fmi_version=3, platforms=["x86_64-linux"]),
                                  "x86_64-linux"),
               "pythonfmu FMI 2.0": ("fmi2", dict(backend="pythonfmu"), "linux64")}
+    builds = {label: b for label, b in builds.items() if b[1]["backend"] in backends}
+    positive = _POSITIVE_PARAMETER.get(kind, "stiffness")
     specs = {}
     for label, (api, options, platform) in builds.items():
         stem = label.replace(" ", "_").replace(".", "")
@@ -303,7 +311,7 @@ def _fmus(kind: str, folder: Path) -> dict:
         resources = unzipped / "resources"
         specs[label] = {"api": api, "lib": str(lib), "guid": md.guid,
                         "resources": resources.as_uri() if api == "fmi2" else f"{resources}/",
-                        "stiffness_vr": next(v.valueReference for v in md.modelVariables if v.name == "stiffness")}
+                        "stiffness_vr": next(v.valueReference for v in md.modelVariables if v.name == positive)}
     return specs
 
 
