@@ -291,35 +291,16 @@ def _stream_figures(rep, folder: Path) -> None:
             rep.figures[key] = path
 
 
-def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = True,
-              scheduler: str | None = None) -> BatchResult:
-    """Process recordings into `out_dir` (fmu/, params/); the caller renders the report.
+def _read_all(paths, out_dir: Path):
+    """Read every recording (nothing is written): the reports, the jobs and each recording's tire order.
 
-    Parameters
-    ----------
-    paths : list of path-like
-        Recording CSV files.
-    out_dir : path-like
-        Output folder (created).
-    workers : int, optional
-        Processes (default: the machine's cores).
-    progress : bool
-        Progress bar on stderr (on a terminal, after one second).
-    scheduler : str, optional
-        Address of a Dask distributed scheduler: the jobs run on its workers
-        (:class:`~identification.executors.DaskExecutor`; recordings and `out_dir` on a file system they
-        share), else on `workers` local processes.  Either way each result's figures go to
-        ``out_dir/.figures-staging/`` as it arrives (:func:`_stream_figures`).
+    Raises
+    ------
+    InputError
+        No recording can be read (the first one's problem, and how many more failed).
     """
     from .recording import read_recording
 
-    t0 = time.perf_counter()
-    out_dir = Path(out_dir)
-    for sub in ("", "fmu", "params"):
-        (out_dir / sub).mkdir(parents=True, exist_ok=True)
-    remove_staging(out_dir)
-    figures = out_dir / FIGURES_STAGING
-    figures.mkdir()
     reports, jobs, stems, order = [], [], set(), {}
     for path in paths:
         stem = Path(path).stem
@@ -337,19 +318,65 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
         jobs.insert(0, ("recording", str(path), stem, str(out_dir)))
         jobs += [("tire", str(path), stem, tire, str(out_dir)) for tire in rec.tires]
         order[stem] = list(rec.tires)
+    if reports and not jobs:
+        more = f" (and {len(reports) - 1} more recording(s) that cannot be read)" if len(reports) > 1 else ""
+        raise InputError(reports[0].source, reports[0].error + more)
+    return reports, jobs, order
+
+
+def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = True,
+              scheduler: str | None = None) -> BatchResult:
+    """Process recordings into `out_dir` (fmu/, params/); the caller renders the report.
+
+    Parameters
+    ----------
+    paths : list of path-like
+        Recording CSV files.
+    out_dir : path-like
+        Output folder, created with its missing parents once the recordings are read and the executor is
+        up (:func:`identification.cliutil.make_folders`: inside an
+        :class:`~identification.cliutil.OutputFolders` block a failed run removes them again).
+    workers : int, optional
+        Processes (default: the machine's cores).
+    progress : bool
+        Progress bar on stderr, on a terminal: shown at once and redrawn every second.
+    scheduler : str, optional
+        Address of a Dask distributed scheduler: the jobs run on its workers
+        (:class:`~identification.executors.DaskExecutor`; recordings and `out_dir` on a file system they
+        share), else on `workers` local processes.  Either way each result's figures go to
+        ``out_dir/.figures-staging/`` as it arrives (:func:`_stream_figures`).
+
+    Returns
+    -------
+    BatchResult
+        Every recording's report (tires in the recording's file order), the total wall time and the
+        time per stage summed over the jobs.
+
+    Raises
+    ------
+    InputError
+        No recording can be read, an unusable scheduler, or an output folder that cannot be created;
+        nothing is written then.
+    """
+    from .cliutil import make_folders
+
+    t0 = time.perf_counter()
+    out_dir = Path(out_dir)
+    reports, jobs, order = _read_all(paths, out_dir)
     workers = max(1, min(workers or os.cpu_count() or 1, len(jobs) or 1))
-    from tqdm import tqdm
-    from .executors import executor_for
-    bar = tqdm(total=len(jobs), desc="cleatfmu", unit="job", delay=1.0, disable=None if progress else True)
+    from .executors import executor_for, ProgressBar
+    figures = out_dir / FIGURES_STAGING
     results = []
-    try:
-        with executor_for(workers, scheduler) as executor:
+    with executor_for(workers, scheduler) as executor:
+        for sub in ("fmu", "params"):
+            make_folders(out_dir / sub)
+        remove_staging(out_dir)
+        make_folders(figures)
+        with ProgressBar(len(jobs), enabled=progress) as bar:
             for rep in executor.map_unordered(_job, jobs):
                 _stream_figures(rep, figures)
                 results.append(rep)
                 bar.update(1)
-    finally:
-        bar.close()
     by_stem = {r.stem: r for r in reports}
     for rep in results:
         if isinstance(rep, DiagnosisReport):

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from .errors import InputError
 
-__all__ = ["LocalExecutor", "DaskExecutor", "executor_for"]
+__all__ = ["LocalExecutor", "DaskExecutor", "executor_for", "ProgressBar"]
 
 
 class LocalExecutor:
@@ -50,12 +50,24 @@ class LocalExecutor:
 _SCHEMES = ("tcp", "tls", "ws", "wss", "inproc", "ucx")
 
 
-class DaskExecutor:
-    """The workers of a Dask distributed scheduler at `address` (e.g. ``tcp://10.0.0.5:8786``)."""
+#: Seconds to wait for a Dask scheduler before a run is refused (``--scheduler``).
+CONNECT_TIMEOUT_S = 10.0
 
-    def __init__(self, address: str, *, timeout_s: float = 10.0):
+
+class DaskExecutor:
+    """The workers of a Dask distributed scheduler at `address` (e.g. ``tcp://10.0.0.5:8786``).
+
+    Parameters
+    ----------
+    address : str
+        The scheduler's address.
+    timeout_s : float, optional
+        Seconds to wait for it (default :data:`CONNECT_TIMEOUT_S`).
+    """
+
+    def __init__(self, address: str, *, timeout_s: float | None = None):
         self.address = address
-        self.timeout_s = timeout_s
+        self.timeout_s = CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
         self._client = None
 
     def __enter__(self):
@@ -96,3 +108,42 @@ def executor_for(workers: int | None, scheduler: str | None = None):
         return DaskExecutor(scheduler)
     import os
     return LocalExecutor(workers or os.cpu_count() or 1)
+
+
+class ProgressBar:
+    """A batch's progress bar on stderr (tqdm, on a terminal only), drawn at once and redrawn every `every` s.
+
+    Its elapsed time moves from the first second, before the first result arrives (a recording's diagnosis
+    takes several seconds).  Use as ``with ProgressBar(n) as bar: ... bar.update(1)``.
+
+    Parameters
+    ----------
+    total : int
+        Number of jobs.
+    enabled : bool
+        False: no bar at all.
+    every : float
+        Redraw interval, s.
+    """
+
+    def __init__(self, total: int, *, enabled: bool = True, every: float = 1.0):
+        import threading
+        from tqdm import tqdm
+        self.bar = tqdm(total=total, desc="cleatfmu", unit="job", disable=None if enabled else True)
+        self.every = every
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._redraw, name="cleatfmu-progress", daemon=True)
+
+    def _redraw(self) -> None:
+        while not self._stop.wait(self.every):
+            self.bar.refresh()
+
+    def __enter__(self):
+        self._thread.start()
+        return self.bar
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        self._stop.set()
+        self._thread.join()
+        self.bar.close()
+        return False

@@ -38,15 +38,16 @@ def test_a_report_on_a_dask_cluster_equals_the_local_one(cli, day, tmp_path):
 
 @pytest.mark.parametrize("address, problem", [("nonsense://x", "not a Dask scheduler address"),
                                               ("tcp://127.0.0.1:1", "cannot reach the Dask scheduler")])
-def test_an_unusable_scheduler_is_one_line_and_exit_2(cli, day, tmp_path, address, problem):
+def test_an_unusable_scheduler_is_one_line_and_exit_2(cli, day, tmp_path, monkeypatch, address, problem):
+    import time
     from identification import executors
-    executors.DaskExecutor.__init__.__defaults__ = (1.0,)      # a short connection timeout for the test
-    try:
-        res = cli("report", day, "-o", tmp_path / "out", "--scheduler", address)
-    finally:
-        executors.DaskExecutor.__init__.__defaults__ = (10.0,)
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 1.0)    # a short connection timeout for the test
+    t0 = time.monotonic()
+    res = cli("report", day, "-o", tmp_path / "new" / "out", "--scheduler", address)
+    assert time.monotonic() - t0 < 8.0                          # refused after the timeout, not the default 10 s
     assert res.code == 2 and res.err.startswith("cleatfmu: error: --scheduler:") and problem in res.err, res.err
     assert res.err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []                   # nothing written, no folder left
 
 
 def test_tires_keep_the_file_order_whatever_order_the_results_arrive_in(day, tmp_path, monkeypatch):

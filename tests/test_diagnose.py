@@ -130,8 +130,12 @@ def test_cli_json_fmu_plot_and_no_truth(cli, tmp_path):
     from fmpy.validation import validate_fmu
     assert validate_fmu(str(tmp_path / "ext.fmu")) == []
     assert (tmp_path / "d.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    text = cli("diagnose", csv_path, "--tire", tire, "--workers", "1")
-    assert text.code == 0 and "enveloping" in text.out and "NRMSE" in text.out
+    # the text form (on a one-hub recording of the same effect: the same command, a fraction of the fit)
+    one, _ = write_run(run_rig(("enveloping",), {"sensor.channels": "FL", "sensor.rate_hz": 500.0}, seed=3),
+                       tmp_path / "one")
+    text = cli("diagnose", one, "--tire", "fl", "--workers", "1")
+    assert text.code == 0 and "effects the four-corner model misses: enveloping" in text.out, text.out
+    assert "FL: k " in text.out and "NRMSE" in text.out
 
 
 def test_diagnosis_code_never_touches_the_truth():

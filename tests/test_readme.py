@@ -1,30 +1,157 @@
-"""The README's quick start and its fmpy example stay true."""
+"""The README is executable: every command block runs, in order, in one temporary folder.
 
+A fenced block is one of:
+
+* ``<!-- ci:main -->`` / ``<!-- ci:test -->``: the two quick-start commands, which ``.ci/run`` runs itself;
+* ``<!-- synopsis -->``: a synopsis with placeholders (``REC.csv``, ``[--json]``); every command and option
+  it names must exist;
+* ``<!-- not run: REASON -->``: not run, for the reason given (the benchmarks); the scripts it names exist;
+* otherwise run: ``sh`` blocks with bash (``set -euo pipefail``, the package's ``cleatfmu`` on the PATH),
+  the ``python`` block (the Python API example) in one process, ``json`` blocks read as what they show
+  (a recording's sidecar).
+"""
+
+from __future__ import annotations
+
+import json
+import os
 import re
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
-README = (Path(__file__).parents[1] / "README.md").read_text()
+ROOT = Path(__file__).parents[1]
+README = (ROOT / "README.md").read_text(encoding="utf-8")
+_BLOCK = re.compile(r"(?:<!--\s*(?P<mark>[^>]*?)\s*-->[ \t]*\n)?(?P<indent>[ \t]*)```(?P<lang>\w*)\n(?P<body>.*?)"
+                    r"^(?P=indent)```[ \t]*$", re.S | re.M)
 
 
-def test_quick_start_has_exactly_two_commands_that_ci_runs():
+def _blocks() -> list[dict]:
+    """Every fenced block: its line, language, marker comment (or None) and text (indentation removed)."""
+    out = []
+    for m in _BLOCK.finditer(README):
+        indent = len(m.group("indent"))
+        body = "\n".join(line[indent:] for line in m.group("body").splitlines())
+        out.append({"line": README.count("\n", 0, m.start("lang")) + 1, "lang": m.group("lang"),
+                    "mark": m.group("mark"), "body": body})
+    return out
+
+
+BLOCKS = _blocks()
+
+
+def _kind(block: dict) -> str:
+    mark = block["mark"] or ""
+    if mark.startswith("ci:"):
+        return "ci"
+    if mark == "synopsis":
+        return "synopsis"
+    if mark.startswith("not run:") and mark[len("not run:"):].strip():
+        return "not run"
+    assert not mark, f"README line {block['line']}: unknown block marker <!-- {mark} -->"
+    assert block["lang"] in ("sh", "python", "json"), \
+        f"README line {block['line']}: a ```{block['lang']} block is neither run nor marked"
+    return "run"
+
+
+def test_every_block_is_run_or_marked_and_ci_runs_the_quick_start():
+    kinds = [_kind(b) for b in BLOCKS]
+    assert kinds.count("run") >= 9 and {b["lang"] for b, k in zip(BLOCKS, kinds) if k == "run"} == \
+        {"sh", "python", "json"}
+    # the quick start holds exactly the two commands CI runs, main job first
     quick = README[README.index("## Quick start"):README.index("## Workflow")]
-    blocks = re.findall(r"<!-- ci:(\w+) -->\s*```sh\n(.+?)\n```", quick, re.S)
-    assert [name for name, _ in blocks] == ["main", "test"]
-    assert blocks[0][1].endswith("cleatfmu demo") and "pytest" in blocks[1][1]
-    ci = (Path(__file__).parents[1] / ".ci" / "run").read_text()
-    assert "for name in main test" in ci and "README.md" in ci
+    ci = [b for b, k in zip(BLOCKS, kinds) if k == "ci"]
+    assert [b["mark"] for b in ci] == ["ci:main", "ci:test"] and all(b["body"] in quick for b in ci)
+    assert ci[0]["body"].endswith("cleatfmu demo") and "pytest" in ci[1]["body"]
+    run = (ROOT / ".ci" / "run").read_text()
+    assert "for name in main test" in run and "README.md" in run
+    # chromium comes from CI's setup, before the tests, never from a test
+    assert run.index("bash .ci/setup-chromium") < run.index("for name in main test")
+    assert "apt-get install" in (ROOT / ".ci" / "setup-chromium").read_text()
+    installs = re.compile(r"apt-get (?:update|install -y)")
+    assert [p.name for p in (ROOT / "tests").glob("test_*.py")
+            if p.name != Path(__file__).name and installs.search(p.read_text())] == []
 
 
-@pytest.mark.parametrize("backend", ["native", "pythonfmu"])
-def test_fmpy_example_runs(tmp_path, monkeypatch, backend):
+def test_synopses_name_real_commands_and_options():
+    from identification.cli import build_parser
+    commands = next(a for a in build_parser()._actions if getattr(a, "choices", None)).choices
+    checked = 0
+    for block in (b for b in BLOCKS if _kind(b) == "synopsis"):
+        for line in block["body"].splitlines():
+            words = line.split("#", 1)[0].split()
+            if not words or words[0] != "cleatfmu":
+                continue
+            assert words[1] in commands, (block["line"], line)
+            options = {o for a in commands[words[1]]._actions for o in a.option_strings}
+            for option in re.findall(r"(?<![\w-])(--?[a-z][a-z0-9-]*)", " ".join(words[2:])):
+                assert option in options, (block["line"], line, option)
+            checked += 1
+    assert checked >= 10
+
+
+def test_scripts_of_blocks_not_run_exist():
+    named = [m for b in BLOCKS if _kind(b) == "not run"
+             for m in re.findall(r"python (\S+\.py)", b["body"])]
+    assert len(named) >= 10
+    assert [p for p in named if not (ROOT / p).is_file()] == []
+
+
+def _python_example(code: str, cwd: Path, env: dict) -> dict:
+    """Run the README's Python example in one process in `cwd`; its variables that are numbers, as JSON."""
+    dump = ("\nimport json as _j, sys as _s\n_j.dump({_k: _v for _k, _v in dict(globals()).items() "
+            "if isinstance(_v, (int, float)) and not _k.startswith('_')}, _s.stdout)\n")
+    proc = subprocess.run([sys.executable, "-c", code + dump], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def test_readme_blocks_run_in_order(tmp_path):
+    """Every runnable block, in README order, in one folder: each command's files feed the next blocks."""
+    from identification.recording import read_recording
+
+    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}",
+               MPLBACKEND="Agg")
+    assert shutil.which("cleatfmu", path=env["PATH"]), "the package's cleatfmu command is not installed"
+    ran = {"sh": 0, "python": 0, "json": 0}
+    for block in (b for b in BLOCKS if _kind(b) == "run"):
+        where = f"README line {block['line']}"
+        if block["lang"] == "sh":
+            proc = subprocess.run(["bash", "-c", "set -euo pipefail\n" + block["body"]], cwd=tmp_path, env=env,
+                                  capture_output=True, text=True, timeout=300)
+            assert proc.returncode == 0, f"{where}: exit {proc.returncode}\n{proc.stderr[-2000:]}"
+            assert "Traceback" not in proc.stderr, (where, proc.stderr)
+        elif block["lang"] == "python":
+            # the Python API example: the force the native FMU exported above gives at 2 cm deflection
+            k = json.loads((tmp_path / "params.json").read_text())["tires"]["FL"]["k"]
+            assert _python_example(block["body"], tmp_path, env)["force"] == pytest.approx(k * 0.02, rel=1e-9)
+        else:
+            # the sidecar shown: a recording of the four tires with it, read back, keeps its values
+            from identification.examples import example_path
+            sidecar = json.loads(block["body"])
+            folder = tmp_path / "sidecar"
+            folder.mkdir()
+            shutil.copyfile(example_path("7kmh"), folder / "REC.csv")
+            (folder / "REC.json").write_text(block["body"])
+            rec = read_recording(folder / "REC.csv")
+            assert rec.speed_kmh == sidecar["speed_kmh"] and rec.wheel_load_N["RR"] == pytest.approx(15510.0)
+        ran[block["lang"]] += 1
+    assert ran["python"] == 1 and ran["json"] == 1 and ran["sh"] >= 7
+    # what the blocks say they write
+    for name in ("REC.truth.json", "params.json", "FL.fmu", "FL.png", "DIAG.json", "ALL.png", "DIAG.png",
+                 "FL_ext.fmu", "ride.png"):
+        assert (tmp_path / name).stat().st_size > 0, name
+    assert sorted(p.name for p in (tmp_path / "fmus").iterdir()) == [f"REC_{t}.fmu" for t in ("FL", "FR", "RL",
+                                                                                              "RR")]
+
+
+def test_python_example_runs_with_the_pythonfmu_fmu_too(tmp_path):
     from build_scripts import build_fmu
-    build_fmu("point_contact", tmp_path / "FL.fmu", backend=backend,
+    build_fmu("point_contact", tmp_path / "FL.fmu", backend="pythonfmu",
               start_values={"stiffness": 500e3, "damping": 4000.0, "unloaded_radius": 0.75})
-    section = README[README.index("### Using the FMU in another tool"):]
-    code = re.search(r"```python\n(.+?)```", section, re.S).group(1)
-    monkeypatch.chdir(tmp_path)
-    scope: dict = {}
-    exec(compile(code, "README example", "exec"), scope)
-    assert scope["force"] == pytest.approx(500e3 * (0.75 - 0.73), rel=1e-12)
+    code = next(b["body"] for b in BLOCKS if b["lang"] == "python" and _kind(b) == "run")
+    assert _python_example(code, tmp_path, dict(os.environ))["force"] == pytest.approx(500e3 * 0.02, rel=1e-12)

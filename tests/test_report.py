@@ -1,7 +1,7 @@
 """``cleatfmu demo`` and ``cleatfmu report``: the whole chain into a self-contained HTML report."""
 
 import base64
-import fcntl
+import contextlib
 import io
 import json
 import os
@@ -19,11 +19,32 @@ SECTIONS = ("recommended", "howto", "speed", "summary", "table4", "waveform", "d
 
 
 @pytest.fixture(scope="module")
-def demo(tmp_path_factory):
+def demo_run(tmp_path_factory):
+    """``cleatfmu demo`` into a folder whose parents do not exist yet: exit status, folder, stdout."""
     from identification.cli import main
-    out = tmp_path_factory.mktemp("demo") / "out"
-    code = main(["demo", "--out", str(out), "--workers", "2"])
-    return code, out
+    out = tmp_path_factory.mktemp("demo") / "new" / "deeper" / "out"
+    stdout = io.StringIO()
+    with contextlib.redirect_stdout(stdout):
+        code = main(["demo", "--out", str(out), "--workers", "2"])
+    return code, out, stdout.getvalue()
+
+
+@pytest.fixture(scope="module")
+def demo(demo_run):
+    return demo_run[:2]
+
+
+def test_demo_creates_its_folders_and_says_what_it_wrote_and_how_to_open_it(demo_run):
+    code, out, stdout = demo_run
+    assert code == 0 and (out / "report.html").is_file()
+    lines = stdout.splitlines()
+    # said at once what it is about to do, at the end what it wrote and how to open the report
+    assert lines[0] == f"cleatfmu demo: 2 recording(s) into {out}{os.sep} on up to 2 local process(es)"
+    wrote = {line.split(" (")[0].removeprefix("wrote ") for line in lines if line.startswith("wrote ")}
+    assert wrote == {str(out / "report.html"), str(out / "summary.json"), f"{out / 'tables'}{os.sep}",
+                     f"{out / 'fmu'}{os.sep}", f"{out / 'params'}{os.sep}"}
+    assert f"{out / 'fmu'}{os.sep} (16 FMUs)" in stdout and f"{out / 'tables'}{os.sep} (4 CSV tables)" in stdout
+    assert lines[-1] == f"open the report in a web browser: {(out / 'report.html').resolve().as_uri()}"
 
 
 def _png(data: bytes):
@@ -142,19 +163,11 @@ def test_demo_recommends_one_joint_k_c_per_tire_within_the_truth(demo):
 
 
 def _chromium():
+    """The headless browser, installed by CI's setup (``.ci/setup-chromium``), never by a test; else skip."""
     found = shutil.which("chromium") or shutil.which("chromium-browser")
-    if found:
-        return found
-    if os.geteuid() != 0 or not shutil.which("apt-get"):
-        pytest.skip("chromium is not installed and cannot be installed here (needs root and apt-get)")
-    with open("/tmp/cleatfmu-chromium-install.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not shutil.which("chromium"):
-            proc = subprocess.run(["bash", "-c", "apt-get update -qq && DEBIAN_FRONTEND=noninteractive "
-                                   "apt-get install -y -qq chromium"], capture_output=True, text=True, timeout=1200)
-            if not shutil.which("chromium"):
-                pytest.skip(f"chromium could not be installed: {proc.stderr.strip()[-300:]}")
-    return shutil.which("chromium")
+    if not found:
+        pytest.skip("chromium is not installed (CI installs Debian's chromium with .ci/setup-chromium, as root)")
+    return found
 
 
 def test_report_renders_in_headless_chromium(demo, tmp_path):
@@ -217,10 +230,12 @@ def test_report_with_a_broken_recording(cli, tmp_path):
     lines[700] = lines[700].split(",")[0] + ",abc"          # one unreadable cell
     (data / "broken.csv").write_text("\n".join(lines) + "\n")
     (data / "broken.json").write_text((data / "good_a.json").read_text())
-    res = cli("report", data, "-o", tmp_path / "out", "--workers", "2")
+    out = tmp_path / "new" / "deeper" / "out"            # missing parents are created
+    res = cli("report", data, "-o", out, "--workers", "2")
     assert res.code == 2
     assert "broken.csv" in res.err and "not a number" in res.err
-    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert res.out.splitlines()[-1] == f"open the report in a web browser: {(out / 'report.html').resolve().as_uri()}"
+    summary = json.loads((out / "summary.json").read_text())
     by_name = {os.path.basename(r["source"]): r for r in summary["recordings"]}
     assert by_name["broken.csv"]["ok"] is False and "abc" in by_name["broken.csv"]["error"]
     for good in ("good_a.csv", "good_b.csv"):
@@ -228,10 +243,73 @@ def test_report_with_a_broken_recording(cli, tmp_path):
         assert by_name[good]["diagnosis"] is not None
         assert by_name[good]["tires"]["FL"]["recommended"]["source"] == "joint diagnosis"
     assert by_name["good_b.csv"]["diagnosis"]["effects"] == ["enveloping"]
-    html = (tmp_path / "out" / "report.html").read_text()
+    html = (out / "report.html").read_text()
     assert "broken.csv" in html and "failed" in html
 
 
 def test_report_needs_recordings(cli, tmp_path):
     res = cli("report", tmp_path, "-o", tmp_path / "out")
     assert res.code == 2 and "no recording" in res.err
+
+
+@pytest.mark.parametrize("case", ["unreadable", "through a file", "interrupted"])
+def test_a_failed_run_into_new_folders_leaves_none_behind(cli, tmp_path, monkeypatch, case):
+    """report: nothing readable; demo: a path through a file, or interrupted once its folders exist.
+    One line on stderr, exit 2 (130 interrupted), and no folder left behind."""
+    import identification.batch as batch
+
+    (tmp_path / "bad.csv").write_text("x,FL\n0,1\n")
+    (tmp_path / "file").write_text("")
+    made = []
+
+    def interrupt(job):
+        made.extend(p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_dir())
+        raise KeyboardInterrupt
+    monkeypatch.setattr(batch, "_job", interrupt)
+    if case == "unreadable":
+        res = cli("report", tmp_path / "bad.csv", "-o", tmp_path / "a" / "b" / "c")
+        assert res.code == 2 and res.err == f"cleatfmu: error: {tmp_path / 'bad.csv'}: sidecar bad.json not " \
+                                           "found (a recording is NAME.csv + NAME.json)\n", res.err
+    elif case == "through a file":
+        res = cli("demo", "--out", tmp_path / "file" / "b" / "c")
+        assert res.code == 2 and res.err == f"cleatfmu: error: {tmp_path / 'file'}: is not a directory\n", res.err
+    else:
+        res = cli("demo", "--out", tmp_path / "a" / "b" / "c", "--workers", "1")
+        assert res.code == 130 and res.err == "cleatfmu: interrupted\n", res.err
+        assert {"a/b/c/fmu", "a/b/c/params", "a/b/c/.figures-staging"} <= {str(p) for p in made}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "file"]
+
+
+def test_the_progress_bar_shows_from_the_first_second(tmp_path, monkeypatch):
+    """On a terminal the bar is drawn at once and its elapsed time moves before the first result arrives."""
+    import time
+    import identification.batch as batch
+
+    class Terminal(io.StringIO):
+        def __init__(self):
+            super().__init__()
+            self.times = []
+
+        def isatty(self):
+            return True
+
+        def write(self, text):
+            self.times.append(time.monotonic())
+            return super().write(text)
+
+    def slow_job(job):                                           # the diagnosis, first, takes 1.8 s
+        if job[0] == "recording":
+            time.sleep(1.8)
+            return batch.DiagnosisReport(recording=job[2])
+        return batch.TireReport(recording=job[2], tire=job[3])
+
+    write_run(run_rig((), {"sensor.channels": "FL", "sensor.rate_hz": 500.0}, seed=1), tmp_path / "one")
+    monkeypatch.setattr(batch, "_job", slow_job)
+    terminal = Terminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    t0 = time.monotonic()
+    batch.run_batch([tmp_path / "one.csv"], tmp_path / "out", workers=1)
+    draws = [t - t0 for t in terminal.times]
+    assert draws and draws[0] < 1.0, draws                       # drawn within the first second
+    assert sum(1 for t in draws if 1.0 < t < 1.8) >= 1, draws    # redrawn while the first job still runs
+    assert "0/2" in terminal.getvalue() and "2/2" in terminal.getvalue()
