@@ -30,6 +30,7 @@ from pathlib import Path, PureWindowsPath
 
 from .cliutil import OutputFolders, check_folder, make_folders
 from .errors import InputError
+from .plausibility import check_value
 from .tire_law import value_problem
 
 __all__ = ["DEFAULT_UNLOADED_RADIUS_M", "FMU_KIND", "read_identified", "export_fmu", "add_parser", "run"]
@@ -66,7 +67,11 @@ def _show(value) -> str:
     return repr(value)
 
 
-def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
+#: What ``--accept-out-of-range`` says in the messages of values out of their plausible range.
+_ACCEPT_HINT = "; a genuine value: export with --accept-out-of-range"
+
+
+def read_identified(path, tire: str | None = None, *, accept_out_of_range: bool = False) -> tuple[dict, str, dict]:
     """Read and check a ``cleatfmu identify --json`` document.
 
     Parameters
@@ -75,6 +80,9 @@ def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
         The PARAMS.json file.
     tire : str, optional
         Tire to export (any letter case: ``fl`` names FL); may be omitted when the file holds exactly one.
+    accept_out_of_range : bool
+        Accept k, c and the corner mass outside their plausible ranges
+        (:data:`identification.plausibility.RANGES`); they must still be finite, k > 0 and c >= 0.
 
     Returns
     -------
@@ -88,7 +96,8 @@ def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
     Raises
     ------
     InputError
-        Unreadable or malformed file, missing tire, invalid k or c (one line, naming the file).
+        Unreadable or malformed file, missing tire, invalid k or c, or k, c or mass out of their
+        plausible ranges (one line, naming the file).
     """
     path = Path(path)
     try:
@@ -131,6 +140,12 @@ def read_identified(path, tire: str | None = None) -> tuple[dict, str, dict]:
         problem = value_problem(name, unit, entry[key], strictly_positive=strictly)
         if problem is not None:
             raise InputError(path, f"tire {tire}: {problem}")
+    if not accept_out_of_range:
+        for key, quantity, label in (("k", "stiffness_N_m", "stiffness k"), ("c", "damping_Ns_m", "damping c"),
+                                     ("mass", "corner_mass_kg", "corner mass")):
+            problem = check_value(quantity, entry.get(key), label=label, hint=_ACCEPT_HINT)
+            if problem is not None:
+                raise InputError(path, f"tire {tire}: {problem}")
     if "speed_kmh" in doc and not _finite_number(doc["speed_kmh"]):
         raise InputError(path, f"speed_kmh must be a finite number, got {_show(doc['speed_kmh'])}")
     return doc, tire, entry
@@ -177,7 +192,8 @@ def _description(doc: dict, tire: str, starts: dict, entry: dict, radius_given: 
 
 
 def export_fmu(params_path, output_path, *, tire: str | None = None, unloaded_radius_m: float | None = None,
-               backend: str = "pythonfmu", fmi_version: int = 2, platforms=None) -> Path:
+               backend: str = "pythonfmu", fmi_version: int = 2, platforms=None,
+               accept_out_of_range: bool = False) -> Path:
     """Build the point-contact tire FMU for one identified tire.
 
     Parameters
@@ -199,6 +215,9 @@ def export_fmu(params_path, output_path, *, tire: str | None = None, unloaded_ra
         FMI version (native backend: 2 or 3).
     platforms : list of str, optional
         Platforms of a native FMU (default: all).
+    accept_out_of_range : bool
+        Accept k, c, the corner mass and the unloaded radius outside their plausible ranges
+        (:mod:`identification.plausibility`).
 
     Returns
     -------
@@ -212,10 +231,12 @@ def export_fmu(params_path, output_path, *, tire: str | None = None, unloaded_ra
     """
     from build_scripts import build_fmu
 
-    doc, tire, entry = read_identified(params_path, tire)
+    doc, tire, entry = read_identified(params_path, tire, accept_out_of_range=accept_out_of_range)
     radius_given = unloaded_radius_m is not None
     radius = float(unloaded_radius_m) if radius_given else DEFAULT_UNLOADED_RADIUS_M
     problem = value_problem("unloaded radius", "m", radius, strictly_positive=True)
+    if problem is None and not accept_out_of_range:
+        problem = check_value("unloaded_radius_m", radius, label="unloaded radius", hint=_ACCEPT_HINT)
     if problem is not None:
         raise InputError("--unloaded-radius-m", problem)
     output_path = Path(output_path)
@@ -289,6 +310,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--backend", default="native", metavar="{native,pythonfmu}",
                    help="native: C binaries for Linux, Windows and macOS, no Python needed in the importer; "
                         "pythonfmu: the Python slave (needs Python 3 in the importer) (default: %(default)s)")
+    p.add_argument("--accept-out-of-range", action="store_true",
+                   help="accept k, c, the corner mass and the unloaded radius outside their plausible ranges for a "
+                        "tractor tire (k 10 kN/m-10 MN/m, c 0-100 kN s/m, mass 10-10200 kg, r0 0.1-2 m); they must "
+                        "still be finite, k > 0, c >= 0")
     p.add_argument("--fmi-version", type=int, default=2, metavar="{2,3}",
                    help="FMI version of a native FMU: 2 (FMI 2.0) or 3 (FMI 3.0) (default: %(default)s)")
     p.add_argument("--platforms", default=None, metavar="P1,P2",
@@ -299,11 +324,12 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     """Run ``cleatfmu export``; returns 0 (user errors raise InputError)."""
-    _, tire, entry = read_identified(args.params, args.tire)
+    _, tire, entry = read_identified(args.params, args.tire, accept_out_of_range=args.accept_out_of_range)
     output = Path(args.output) if args.output else Path(f"{tire}.fmu")
     platforms = None if args.platforms is None else [p.strip() for p in args.platforms.split(",") if p.strip()]
     _check_backend(args.backend, args.fmi_version, platforms)
     path = export_fmu(args.params, output, tire=tire, unloaded_radius_m=args.unloaded_radius_m,
-                      backend=args.backend, fmi_version=args.fmi_version, platforms=platforms)
+                      backend=args.backend, fmi_version=args.fmi_version, platforms=platforms,
+                      accept_out_of_range=args.accept_out_of_range)
     print(f"wrote {path}: tire {tire}, stiffness {entry['k']:.6g} N/m, damping {entry['c']:.6g} N.s/m")
     return 0

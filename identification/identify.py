@@ -100,6 +100,10 @@ class PaperResult:
     n_peaks : int  peaks used in the regression
     mass : float   corner mass W / g, kg
     decay_rate : float  fitted d̂ (eq. 16), 1/s
+    window : dict or None
+        For a long recording analysed on its impact window
+        (:func:`identification.window.focus`): ``{"analysed_s": [start, end],
+        "record_s": [start, end]}``, s; None: the whole recording.
     """
 
     tire: str
@@ -113,14 +117,18 @@ class PaperResult:
     n_peaks: int
     mass: float
     decay_rate: float
+    window: dict | None = None
 
     def to_json(self) -> dict:
-        """The ``identify --json`` entry of this tire."""
-        return {"k": self.k, "c": self.c, "T": self.T, "delta": self.delta, "zeta": self.zeta,
-                "omega_n": self.omega_n, "r2": self.r2, "n_peaks": self.n_peaks, "mass": self.mass}
+        """The ``identify --json`` entry of this tire (with the window analysed, for a long recording)."""
+        doc = {"k": self.k, "c": self.c, "T": self.T, "delta": self.delta, "zeta": self.zeta,
+               "omega_n": self.omega_n, "r2": self.r2, "n_peaks": self.n_peaks, "mass": self.mass}
+        if self.window is not None:
+            doc.update(self.window)
+        return doc
 
 
-def identify_paper(sig: TireSignal, mass_kg: float, *, source=None) -> PaperResult:
+def identify_paper(sig: TireSignal, mass_kg: float, *, source=None, window: dict | None = None) -> PaperResult:
     """Identify k and c from one preprocessed channel by the paper's method.
 
     Parameters
@@ -131,6 +139,8 @@ def identify_paper(sig: TireSignal, mass_kg: float, *, source=None) -> PaperResu
         Corner mass m = W / g, kg.
     source : str, optional
         Named in error messages.
+    window : dict, optional
+        The window of a long recording the signal comes from (:attr:`PaperResult.window`).
     """
     t, a = sig.peak_times_s, sig.peak_values_m_s2
     if t.size < 3:
@@ -146,15 +156,23 @@ def identify_paper(sig: TireSignal, mass_kg: float, *, source=None) -> PaperResu
     omega_n = float(natural_frequency(period, delta))
     return PaperResult(tire=sig.tire, k=mass_kg * omega_n ** 2, c=-2.0 * mass_kg * d, T=period, delta=delta,
                        zeta=float(damping_ratio(delta)), omega_n=omega_n, r2=r2, n_peaks=int(t.size),
-                       mass=mass_kg, decay_rate=d)
+                       mass=mass_kg, decay_rate=d, window=window)
 
 
 def identify(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ) -> dict[str, PaperResult]:
     """Preprocess a recording and identify every requested tire (paper's method).
 
+    A long recording is analysed on its impact window (:func:`identification.window.focus`,
+    which says so on stderr); the results then name the window.
+
     Returns
     -------
     dict of str to PaperResult, in the order of `tires` (default: file order).
     """
+    from .window import focus, window_json
+
+    rec = focus(rec, cutoff_hz=cutoff_hz)
     signals = preprocess(rec, tires, cutoff_hz=cutoff_hz)
-    return {name: identify_paper(sig, rec.mass_kg(name), source=rec.source) for name, sig in signals.items()}
+    window = window_json(rec)
+    return {name: identify_paper(sig, rec.mass_kg(name), source=rec.source, window=window)
+            for name, sig in signals.items()}

@@ -24,6 +24,17 @@ A recording is two files with the same stem:
     mean accelerations over each sample interval).  Unknown extra keys are kept
     and written back unchanged.
 
+Plausibility: speed, cleat, wheelbase, wheel loads, the acquisition's
+high-pass and the sampling rate must lie in the ranges of
+:mod:`identification.plausibility` (a 70 km/h cleat run, loads in N written as
+kN, a 20 Hz sampling rate are refused).  A genuine value outside its range is
+accepted when the sidecar lists the quantity in ``"out_of_range_ok"``, e.g.
+``["speed_kmh", "sampling_rate_hz"]`` (kept and written back like any extra key).
+
+Reading: the CSV is parsed in chunks (:mod:`identification.recording_csv`), in
+memory bounded by the float data; a long recording is analysed on the window
+of its cleat impacts (:mod:`identification.window`).
+
 Inside the package every quantity is SI (m, s, N, kg); the file units above
 are converted at this boundary only.
 """
@@ -34,13 +45,15 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
 from ._files import atomic_write_texts
 from .acquisition import Acquisition, acquisition_from_sidecar
 from .errors import InputError
+from .plausibility import OVERRIDE_KEY, check_value, out_of_range
+from .recording_csv import JITTER_TOLERANCE, MIN_DURATION_S, MIN_SAMPLES, check_time, read_csv
 
 __all__ = [
     "Acquisition", "FORMAT", "TIRES", "FRONT_TIRES", "REAR_TIRES", "STANDARD_GRAVITY",
@@ -54,11 +67,6 @@ FRONT_TIRES = ("FL", "FR")
 REAR_TIRES = ("RL", "RR")
 #: Standard gravity, m/s² (the paper's m = W/g).
 STANDARD_GRAVITY = 9.80665
-#: Largest accepted deviation of a time step from the nominal step (relative).
-JITTER_TOLERANCE = 0.01
-#: Shortest accepted record.
-MIN_SAMPLES = 100
-MIN_DURATION_S = 1.0
 
 _POSITIVE_KEYS = ("speed_kmh", "cleat_height_mm", "cleat_width_mm", "wheelbase_m")
 _KNOWN_KEYS = {"format", "description", "wheel_load_kN", "acquisition", *_POSITIVE_KEYS}
@@ -90,6 +98,12 @@ class Recording:
         Where the recording came from (path of the CSV, or a label).
     acquisition : Acquisition or None
         The channels' analog chain, when the sidecar describes it.
+    record_span_s : tuple of float or None
+        When this is a window of a longer recording (:func:`identification.window.focus`): the first
+        and last sample time of the whole file, s; None: the whole file.
+    decimated_from_hz : float or None
+        When the samples were decimated for the analysis (:func:`identification.window.decimate`): the
+        file's sampling rate, Hz; None: the file's samples.
     """
 
     time_s: np.ndarray
@@ -103,9 +117,11 @@ class Recording:
     extra: dict[str, Any] = field(default_factory=dict)
     source: str = "<memory>"
     acquisition: Acquisition | None = None
+    record_span_s: tuple[float, float] | None = None
+    decimated_from_hz: float | None = None
 
     def __post_init__(self):
-        _check_time(self.source, np.asarray(self.time_s, dtype=float))
+        check_time(self.source, np.asarray(self.time_s, dtype=float))
         aa = self.acquisition
         if aa is not None and aa.anti_alias_order and aa.anti_alias_cutoff_hz >= self.sample_rate_hz / 2:
             raise InputError(self.source, f"acquisition: anti_alias_cutoff_hz {aa.anti_alias_cutoff_hz:g} Hz is "
@@ -196,14 +212,25 @@ def read_recording(csv_path: str | Path) -> Recording:
     if not meta_path.is_file():
         raise InputError(csv_path, f"sidecar {meta_path.name} not found (a recording is NAME.csv + NAME.json)")
     meta = _read_sidecar(meta_path)
-    names, data = _read_csv(csv_path)
+    names, data = read_csv(csv_path, TIRES)
+    rate = (data.shape[1] - 1) / (data[0, -1] - data[0, 0])
+    if "sampling_rate_hz" not in _waived(meta_path, meta.get(OVERRIDE_KEY, [])):
+        problem = out_of_range("sampling_rate_hz", rate, label="sampling rate",
+                               hint=_hint("sampling_rate_hz", meta_path))
+        if problem:
+            raise InputError(csv_path, problem)
+    for i, name in enumerate(names):
+        problem = out_of_range("peak_accel_m_s2", float(np.max(np.abs(data[i + 1]))),
+                               label=f"channel {name}: largest acceleration")
+        if problem:
+            raise InputError(csv_path, problem)
     loads = meta["wheel_load_kN"]
     for name in names:
         if name not in loads:
             raise InputError(meta_path, f"wheel_load_kN has no entry for channel {name}")
     return Recording(
-        time_s=data[:, 0].copy(),
-        accel_m_s2={n: data[:, i + 1].copy() for i, n in enumerate(names)},
+        time_s=data[0],
+        accel_m_s2={n: data[i + 1] for i, n in enumerate(names)},
         speed_m_s=meta["speed_kmh"] / 3.6,
         cleat_height_m=meta["cleat_height_mm"] / 1e3,
         cleat_width_m=meta["cleat_width_mm"] / 1e3,
@@ -246,12 +273,16 @@ def _read_sidecar(path: Path) -> dict[str, Any]:
         raise InputError(path, f"missing key 'format' (expected \"{FORMAT}\")")
     if fmt != FORMAT:
         raise InputError(path, f"unsupported format {json.dumps(fmt)} (expected \"{FORMAT}\")")
+    waived = _waived(path, meta.get(OVERRIDE_KEY, []))
     for key in _POSITIVE_KEYS:
         if key not in meta:
             raise InputError(path, f"missing key '{key}'")
         meta[key] = _positive(path, key, meta[key])
         if meta[key] / 3.6 == 0 or meta[key] / 1e3 == 0:  # would underflow to 0 in SI units (m/s, m)
             raise InputError(path, f"{key} must be a finite number > 0, got {meta[key]!r} (too small)")
+        problem = None if key in waived else out_of_range(key, meta[key], hint=_hint(key))
+        if problem:
+            raise InputError(path, problem)
     loads = meta.get("wheel_load_kN")
     if loads is None:
         raise InputError(path, "missing key 'wheel_load_kN'")
@@ -261,82 +292,44 @@ def _read_sidecar(path: Path) -> dict[str, Any]:
         if name not in TIRES:
             raise InputError(path, f"wheel_load_kN: unknown tire {name!r} (allowed: {', '.join(TIRES)})")
         loads[name] = _positive(path, f"wheel_load_kN.{name}", value)
+        problem = None if "wheel_load_kN" in waived else \
+            out_of_range("wheel_load_kN", loads[name], label=f"wheel_load_kN.{name}", hint=_hint("wheel_load_kN"))
+        if problem:
+            raise InputError(path, problem)
     if "description" in meta and not isinstance(meta["description"], str):
         raise InputError(path, "description must be a string")
+    acq = meta.get("acquisition")
+    if isinstance(acq, dict):
+        for key in ("anti_alias_cutoff_hz", "highpass_hz"):
+            value = acq.get(key)
+            if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 1e308:
+                raise InputError(path, f"acquisition: {key} must be a finite number >= 0, got an integer of "
+                                       f"{len(str(abs(value)))} digits")
+        if "highpass_hz" not in waived:
+            problem = check_value("highpass_hz", acq.get("highpass_hz"), label="acquisition.highpass_hz",
+                                  hint=_hint("highpass_hz"))
+            if problem:
+                raise InputError(path, problem)
     return meta
 
 
-def _read_csv(path: Path) -> tuple[list[str], np.ndarray]:
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError:
-        raise InputError(path, "not a UTF-8 text file") from None
-    lines = text.splitlines()
-    if not lines or not lines[0].strip():
-        raise InputError(path, "empty file (expected a header 'time,<channels>')")
-    header = [h.strip() for h in lines[0].split(",")]
-    if header[0] != "time":
-        raise InputError(path, f"first column must be 'time', found {header[0]!r}")
-    names = header[1:]
-    if not names:
-        raise InputError(path, "no acceleration channel (expected some of FL, FR, RL, RR)")
-    for name in names:
-        if name not in TIRES:
-            raise InputError(path, f"unknown channel {name!r} (allowed: {', '.join(TIRES)})")
-    dupes = sorted({n for n in names if names.count(n) > 1})
-    if dupes:
-        raise InputError(path, f"duplicate channel {dupes[0]}")
-    numbered = [(i + 2, ln) for i, ln in enumerate(lines[1:]) if ln.strip()]
-    if len(numbered) < MIN_SAMPLES:
-        raise InputError(path, f"record too short: {len(numbered)} samples (at least {MIN_SAMPLES} needed)")
-    try:
-        data = np.loadtxt([ln for _, ln in numbered], delimiter=",", dtype=float, ndmin=2)
-        if data.shape[1] != len(header):
-            raise ValueError
-    except ValueError:
-        _locate_bad_cell(path, header, numbered)
-        raise InputError(path, "unreadable numeric data") from None  # pragma: no cover
-    if not np.all(np.isfinite(data)):
-        row, col = np.argwhere(~np.isfinite(data))[0]
-        raise InputError(path, f"line {numbered[row][0]}, column {header[col]}: non-finite value {data[row, col]}")
-    _check_time(path, data[:, 0], line_numbers=[n for n, _ in numbered])
-    return names, data
+#: Quantities of a recording that its sidecar may accept out of their plausible range (``"out_of_range_ok"``).
+WAIVABLE = (*_POSITIVE_KEYS, "wheel_load_kN", "sampling_rate_hz", "highpass_hz")
 
 
-def _locate_bad_cell(path: Path, header: list[str], numbered: list[tuple[int, str]]) -> None:
-    for lineno, line in numbered:
-        cells = line.split(",")
-        if len(cells) != len(header):
-            raise InputError(path, f"line {lineno}: expected {len(header)} cells, found {len(cells)}")
-        for name, cell in zip(header, cells):
-            try:
-                float(cell)
-            except ValueError:
-                raise InputError(path, f"line {lineno}, column {name}: {cell.strip()!r} is not a number") from None
+def _waived(path: Path, value: Any) -> frozenset:
+    """The quantities a sidecar's ``"out_of_range_ok"`` list accepts out of range."""
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise InputError(path, f"{OVERRIDE_KEY} must be a list of quantity names such as [\"speed_kmh\"]")
+    for name in value:
+        if name not in WAIVABLE:
+            raise InputError(path, f"{OVERRIDE_KEY}: unknown quantity {name!r} (known: {', '.join(WAIVABLE)})")
+    return frozenset(value)
 
 
-def _check_time(source, t: np.ndarray, line_numbers: list[int] | None = None) -> None:
-    def line(i: int) -> str:
-        return f"line {line_numbers[i]}" if line_numbers else f"sample {i}"
-
-    if t.ndim != 1 or len(t) < MIN_SAMPLES:
-        raise InputError(source, f"record too short: {len(t)} samples (at least {MIN_SAMPLES} needed)")
-    if not np.all(np.isfinite(t)):
-        raise InputError(source, "time holds non-finite values")
-    dt = np.diff(t)
-    bad = np.flatnonzero(dt <= 0)
-    if bad.size:
-        i = bad[0] + 1
-        raise InputError(source, f"time is not strictly increasing at {line(i)} (t = {t[i]:g} s after {t[i - 1]:g} s)")
-    duration = t[-1] - t[0]
-    if duration < MIN_DURATION_S:
-        raise InputError(source, f"record too short: {duration:g} s (at least {MIN_DURATION_S:g} s needed)")
-    nominal = duration / (len(t) - 1)
-    dev = np.abs(dt - nominal) / nominal
-    worst = int(np.argmax(dev))
-    if dev[worst] > JITTER_TOLERANCE:
-        raise InputError(source, f"time is not uniformly sampled: step {dt[worst]:.6g} s at {line(worst + 1)} "
-                                 f"vs nominal {nominal:.6g} s (tolerance {JITTER_TOLERANCE:.0%})")
+def _hint(key: str, sidecar: Path | None = None) -> str:
+    where = f" of {sidecar.name}" if sidecar is not None else ""
+    return f"; a genuine value: list \"{key}\" in \"{OVERRIDE_KEY}\"{where} to accept it"
 
 
 # ----------------------------------------------------------------------------- writing

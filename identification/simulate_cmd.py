@@ -111,6 +111,22 @@ def _inputs(args) -> tuple[list[str], str | None]:
     return paths[:-1], paths[-1]
 
 
+def _focus(rec, args):
+    """`rec`, or for a long recording its impact window (:func:`identification.window.focus`, noted on stderr)."""
+    from .window import focus
+
+    return focus(rec, cutoff_hz=args.cutoff_hz)
+
+
+def _with_window(doc: dict, rec) -> dict:
+    """The ``--json`` document, with ``"analysis_window"`` for a long recording analysed on its impact window."""
+    from .window import window_json
+
+    if window_json(rec) is not None:
+        doc["analysis_window"] = window_json(rec)
+    return doc
+
+
 def _run_tractor(args) -> int:
     from .simulate_inputs import tractor_fmu_paths
     from .tractor_cosim import simulate_tractor
@@ -123,12 +139,12 @@ def _run_tractor(args) -> int:
     if args.body is None:
         raise InputError("--body", "the whole-tractor form (four FMUs or a directory) needs the body and the "
                                    "arrivals: give --body DIAG.json, a 'cleatfmu diagnose REC.csv --json' document")
-    rec = read_recording_arg(args)
+    rec = _focus(read_recording_arg(args), args)
     check_output(args.plot, ".png", "plot")
     sim = simulate_tractor(paths, rec, args.body, cutoff_hz=args.cutoff_hz, step_s=args.max_step_s)
     if args.plot is not None:
         _save_plot(_plot_tractor(sim), args.plot)
-    print(json.dumps(sim.to_json(), indent=2) if args.json else _tractor_text(sim, args.verbose))
+    print(json.dumps(_with_window(sim.to_json(), rec), indent=2) if args.json else _tractor_text(sim, args.verbose))
     return 0
 
 
@@ -137,8 +153,14 @@ def run(args) -> int:
     from .validation import DEFAULT_MAX_STEP_S, simulate_recording
 
     check_output(args.plot, ".png", "plot", create=False)
-    if args.max_step_s is not None and not args.max_step_s > 0:
-        raise InputError("--max-step-s", f"must be > 0, got {args.max_step_s}")
+    if args.max_step_s is not None:
+        from .plausibility import check_option
+
+        check_option("--max-step-s", args.max_step_s)
+        if args.cutoff_hz > 0 and args.max_step_s > 0.4 / args.cutoff_hz:   # a NaN cut-off: refused later
+            raise InputError("--max-step-s", f"{args.max_step_s:g} s is too coarse for the low-pass at "
+                                             f"{args.cutoff_hz:g} Hz: the co-simulation must sample at 2.5 x the "
+                                             f"cut-off or faster (a step of at most {0.4 / args.cutoff_hz:.3g} s)")
     args.fmu, args.recording = _inputs(args)
     if len(args.fmu) > 1 or Path(args.fmu[0]).is_dir():
         return _run_tractor(args)
@@ -146,6 +168,7 @@ def run(args) -> int:
         raise InputError("--body", "applies to the whole-tractor form (four FMUs or a directory), not to one FMU")
     rec = read_recording_arg(args)
     tire = choose_tire(rec, args.tire)
+    rec = _focus(rec, args)
     check_output(args.plot, ".png", "plot")
     step = args.max_step_s if args.max_step_s is not None else DEFAULT_MAX_STEP_S
     cmp = simulate_recording(args.fmu[0], rec, tire, cutoff_hz=args.cutoff_hz, max_step_s=step,
@@ -153,7 +176,7 @@ def run(args) -> int:
     if args.plot is not None:
         from .plots import plot_comparison
         _save_plot(plot_comparison(cmp), args.plot)
-    print(json.dumps(cmp.to_json(), indent=2) if args.json else _text(cmp, rec))
+    print(json.dumps(_with_window(cmp.to_json(), rec), indent=2) if args.json else _text(cmp, rec))
     return 0
 
 

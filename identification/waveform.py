@@ -133,7 +133,7 @@ def fit_free_decay(time_s, accel_m_s2, *, sigma0: float, omega_d0: float):
     return sol.x, cov, r2, inflation
 
 
-def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None) -> WaveformResult:
+def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: dict | None = None) -> WaveformResult:
     """Identify k and c of one tire from the waveform of its free decay.
 
     Parameters
@@ -142,6 +142,10 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None) -> Wavefo
         A preprocessed channel (its free-vibration window and peaks seed the fit).
     mass_kg : float
         Corner mass m = W / g, kg.
+    source : str, optional
+        Named in error messages.
+    window : dict, optional
+        The window of a long recording the signal comes from (see :class:`PaperResult`).
     """
     paper = identify_paper(sig, mass_kg, source=source)
     t = sig.time_s
@@ -174,11 +178,19 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None) -> Wavefo
         tire=sig.tire, k=k, c=c, T=period, delta=sigma * period, zeta=sigma / math.sqrt(wn2),
         omega_n=math.sqrt(wn2), r2=r2, n_peaks=paper.n_peaks, mass=mass_kg, decay_rate=-sigma,
         k_ci=(k - hk, k + hk), c_ci=(c - hc, c + hc), n_samples=int(sel.sum()),
-        window_s=(float(t[sel][0]), float(t[sel][-1])), variance_inflation=inflation)
+        window_s=(float(t[sel][0]), float(t[sel][-1])), variance_inflation=inflation, window=window)
 
 
 def identify_waveform_recording(rec: Recording, tires=None, *,
                                 cutoff_hz: float = DEFAULT_CUTOFF_HZ) -> dict[str, WaveformResult]:
-    """Preprocess a recording and fit every requested tire's free decay."""
+    """Preprocess a recording and fit every requested tire's free decay.
+
+    A long recording is analysed on its impact window, as by :func:`identification.identify.identify`.
+    """
+    from .window import focus, window_json
+
+    rec = focus(rec, cutoff_hz=cutoff_hz)
     signals = preprocess(rec, tires, cutoff_hz=cutoff_hz)
-    return {name: identify_waveform(sig, rec.mass_kg(name), source=rec.source) for name, sig in signals.items()}
+    window = window_json(rec)
+    return {name: identify_waveform(sig, rec.mass_kg(name), source=rec.source, window=window)
+            for name, sig in signals.items()}

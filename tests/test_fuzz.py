@@ -2,16 +2,23 @@
 
 Every generated input must end in one of two ways:
 
-* a valid result: exit status 0, and for ``identify --json`` a parseable
-  document whose k and c are finite numbers (k > 0, c >= 0); for ``export`` the
-  FMU file (and the missing folders of its path) and nothing else;
+* a valid result: exit status 0, nothing on stderr, and for ``identify
+  --json`` a parseable document whose k and c are finite numbers (k > 0,
+  c >= 0); for ``export`` the FMU file (and the missing folders of its path)
+  and nothing else; for ``diagnose`` finite k and c and exactly the files
+  asked for (``--plot``, ``--fmu``, ``--fmu-dir``); for ``simulate`` a finite
+  NRMSE and the plot asked for; for ``rig`` the three files it prints, the
+  recording readable;
 * a user error: exit status 2, stderr exactly one line
   ``cleatfmu: error: <file or option>: <problem>``, and no file written.
 
 Never a traceback and never a leftover file (temporary ``.tmp``/``.part``
 staging files included).  The strategies start from a small valid recording
-of the virtual rig and mutate it (CSV cells, header, time column, sidecar
-keys, identified parameters, command-line options).
+of the virtual rig (and its point-contact FMU) and mutate it (CSV cells,
+header, time column, sidecar keys, identified parameters, FMU bytes,
+command-line options of ``identify``, ``export``, ``diagnose``, ``simulate``
+and ``rig``).  ``diagnose`` runs with one worker and ``rig`` from a short,
+low-rate run, so that a case costs a fraction of a second.
 
 The CI run is bounded (a few hundred cases, seconds); a larger run with the
 same strategies is ``benchmarks/fuzz_large.py``.
@@ -40,14 +47,16 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 __all__ = ["FuzzFailure", "Case", "recording_cases", "sidecar_cases", "identify_option_cases",
-           "params_cases", "export_option_cases", "ALL_STRATEGIES", "check_case"]
+           "params_cases", "export_option_cases", "diagnose_cases", "simulate_cases", "rig_cases", "ALL_STRATEGIES",
+           "check_case"]
 
 # ----------------------------------------------------------------------------- valid starting points
 
 
 @functools.lru_cache(maxsize=1)
 def base_files() -> dict[str, bytes]:
-    """The valid inputs every case mutates: ``csv``, ``json`` (sidecar) and ``params`` (identify --json)."""
+    """The valid inputs every case mutates: ``csv``, ``json`` (sidecar), ``params`` (identify --json) and ``fmu``
+    (its native point-contact FMU, linux64)."""
     from identification.cli import main
     from identification.rig import run_rig
     from identification.rig.generate import write_run
@@ -61,8 +70,13 @@ def base_files() -> dict[str, bytes]:
         assert status == 0
         params = json.loads(out.getvalue())
         params["recording"] = "base.csv"
+        params_path, fmu = Path(work, "params.json"), Path(work, "FL.fmu")
+        params_path.write_text(json.dumps(params), encoding="utf-8")
+        with contextlib.redirect_stdout(io.StringIO()):  # the point-contact FMU that simulate cases run
+            status = main(["export", str(params_path), "-o", str(fmu), "--platforms", "linux64"])
+        assert status == 0
         return {"csv": csv.read_bytes(), "json": Path(work, "base.json").read_bytes(),
-                "params": json.dumps(params, indent=2).encode()}
+                "params": json.dumps(params, indent=2).encode(), "fmu": fmu.read_bytes()}
 
 
 # ----------------------------------------------------------------------------- a case
@@ -419,9 +433,148 @@ def export_option_cases(draw) -> Case:
     return Case("export", {"params.json": base_files()["params"], "out/.keep": b""}, args)
 
 
+
+# ----------------------------------------------------------------------------- strategies: diagnose
+
+def _recording_files(draw) -> dict[str, bytes]:
+    """The base recording, mostly valid; else its CSV or its sidecar mutated (those end early, in reading)."""
+    kind = draw(st.sampled_from(["valid", "valid", "valid", "csv", "sidecar"]))
+    csv = draw(csv_contents()) if kind == "csv" else base_files()["csv"]
+    meta = draw(sidecar_contents()) if kind == "sidecar" else base_files()["json"]
+    return {"rec.csv": csv, "rec.json": meta}
+
+
+workers = st.sampled_from(["0", "-1", "2", "65", "1000000", "x", "1.5", ""])
+plots = st.sampled_from(["{dir}/out/d.jpg", "{dir}/out", "{dir}/out/.keep/d.png"])
+fmus = st.sampled_from(["{dir}/out/x.zip", "{dir}/out", "{dir}/out/.keep/x.fmu"])
+fmu_dirs = st.sampled_from(["{dir}/out/.keep", "{dir}/out"])
+good_plots = st.sampled_from([None, None, None, "{dir}/out/d.png", "{dir}/new/sub/d.PNG"])
+good_fmus = st.sampled_from([None, None, None, "{dir}/out/x.fmu"])
+good_fmu_dirs = st.sampled_from([None, None, None, None, "{dir}/fmus", "{dir}/new/fmus"])
+
+
+@st.composite
+def diagnose_cases(draw) -> Case:
+    """``diagnose`` of the base recording (or a mutated one) with cheap options: one worker (a pool per case would
+    cost a second), the tire, the cut-off, the output paths; about half the cases valid, the others with one
+    or more bad options."""
+    files = dict(_recording_files(draw), **{"out/.keep": b""})
+    bad = draw(st.booleans())
+    args = [draw(st.sampled_from(["{dir}/missing.csv", "{dir}/rec.json"])) if bad and draw(st.integers(0, 4)) == 0
+            else "{dir}/rec.csv"]
+    args.append("--workers=" + (draw(workers) if bad and draw(st.integers(0, 3)) == 0 else "1"))
+    for flag in ("--json", "-v"):
+        if draw(st.booleans()):
+            args.append(flag)
+    if bad and draw(st.integers(0, 2)) == 0:
+        args.append("--cutoff-hz=" + draw(cutoffs))
+    tire = draw(st.sampled_from([None, "FL", "fl", "RR", "XX"] if bad else [None, "FL", "fl"]))
+    if tire is not None:
+        args.append("--tire=" + tire)
+    for option, good, broken in (("--plot", good_plots, plots), ("--fmu", good_fmus, fmus),
+                                 ("--fmu-dir", good_fmu_dirs, fmu_dirs)):
+        value = draw(broken) if bad and draw(st.integers(0, 3)) == 0 else draw(good)
+        if value is not None:
+            args.append(f"{option}={value}")
+    return Case("diagnose", files, args)
+
+
+# ----------------------------------------------------------------------------- strategies: simulate
+
+steps = st.one_of(st.none(), st.none(), st.sampled_from(["0", "-1e-3", "nan", "inf", "1e-12", "1e-6", "9e-6", "5e-4",
+                                                        "0.005", "0.01", "0.02", "1", "1e308", "abc"]))
+fmu_contents = st.one_of(st.sampled_from([b"", b"PK\x05\x06" + b"\x00" * 18, b"not a zip"]), st.binary(max_size=64))
+
+
+@st.composite
+def simulate_cases(draw) -> Case:
+    """``simulate FMU REC.csv`` of the base FMU (or a broken one) over the base recording (or a mutated one); about
+    half the cases with valid options, the others with one or more bad ones."""
+    files = dict(_recording_files(draw), **{"out/.keep": b""})
+    bad = draw(st.booleans())
+    fmu_kind = draw(st.sampled_from(["bytes", "missing", "csv", "dir"])) if bad and draw(st.integers(0, 3)) == 0 \
+        else "valid"
+    fmu = {"valid": "{dir}/FL.fmu", "bytes": "{dir}/FL.fmu", "missing": "{dir}/nope.fmu", "csv": "{dir}/rec.csv",
+           "dir": "{dir}/out"}[fmu_kind]
+    files["FL.fmu"] = draw(fmu_contents) if fmu_kind == "bytes" else base_files()["fmu"]
+    args = [fmu, "{dir}/rec.csv"]
+    if draw(st.booleans()):
+        args.append("--json")
+    step = draw(steps) if bad else draw(st.sampled_from([None, None, "5e-4", "4e-3"]))
+    if step is not None:
+        args.append("--max-step-s=" + step)
+    if bad and draw(st.integers(0, 2)) == 0:
+        args.append("--cutoff-hz=" + draw(cutoffs))
+    method = draw(st.sampled_from([None, "paper", "waveform"] + (["bogus"] if bad else [])))
+    if method is not None:
+        args.append("--method=" + method)
+    tire = draw(st.sampled_from([None, "FL", "fl"] + (["RR", "XX"] if bad else [])))
+    if tire is not None:
+        args.append("--tire=" + tire)
+    plot = draw(plots) if bad and draw(st.integers(0, 3)) == 0 else draw(good_plots)
+    if plot is not None:
+        args.append("--plot=" + plot)
+    if bad and draw(st.integers(0, 9)) == 0:
+        args.append("--body={dir}/rec.json")
+    return Case("simulate", files, args)
+
+
+# ----------------------------------------------------------------------------- strategies: rig
+
+#: Values for any ``--param``: outside every range, at its edges, no number at all.
+_PARAM_VALUES = ["0", "-1", "1e-300", "1e308", "nan", "inf", "", "abc", "1e400", "0.5", "2", "FL", "FL,XX", "1,2"]
+#: Plausible values that keep a rig run short (the run is the case's cost).
+_CHEAP = {"duration_s": ["1.2", "1.5", "2"], "sensor.rate_hz": ["50", "100", "200", "250"], "t0_s": ["0.2", "0.3"]}
+
+
+@st.composite
+def rig_param(draw) -> str:
+    """One ``--param KEY=VALUE``: a known key with an edge value, a plausible one, or a broken assignment."""
+    from identification.rig.params import PARAMS
+
+    keys = sorted(PARAMS)
+    kind = draw(st.sampled_from(["edge", "edge", "scaled", "broken", "unknown"]))
+    key = draw(st.sampled_from(keys))
+    if kind == "broken":
+        return draw(st.sampled_from(["", "=", "=1", "speed_kmh", "speed_kmh==7", "tire.fl.k_N_m=5e5",
+                                     "sensor.channels=fl,rr", "tire..k_N_m=1"]))
+    if kind == "unknown":
+        return draw(st.text(max_size=12).filter(lambda s: "=" not in s)) + "=1"
+    if key in _CHEAP:
+        return f"{key}={draw(st.sampled_from(_CHEAP[key] + _PARAM_VALUES[:6]))}"
+    if kind == "edge":
+        return f"{key}={draw(st.sampled_from(_PARAM_VALUES))}"
+    default = PARAMS[key].default
+    if isinstance(default, str):
+        return f"{key}={draw(st.sampled_from(['FL', 'RR', 'FL,FR,RL,RR', 'FR,FR', '']))}"
+    return f"{key}={default * draw(st.sampled_from([0.0, 0.5, 0.9, 1.1, 2.0, 10.0, -1.0, 1e3])):g}"
+
+
+@st.composite
+def rig_cases(draw) -> Case:
+    """``rig`` with mutated options; every case starts from a short, low-rate, one-channel run (cheap)."""
+    args = ["--param=duration_s=1.5", "--param=sensor.rate_hz=200", "--param=sensor.channels=FL"]
+    for _ in range(draw(st.integers(0, 3))):
+        args.append("--param=" + draw(rig_param()))
+    if draw(st.integers(0, 3)) == 0:
+        args.append("--speed=" + draw(st.sampled_from(["7", "10", "0", "-7", "0.3", "70", "nan", "inf", "x"])))
+    if draw(st.integers(0, 3)) == 0:
+        args.append("--effect=" + draw(st.sampled_from(["enveloping", "lift_off,axle_coupling", "none", "wobble",
+                                                       "", ",", "enveloping,enveloping", "friction_damping"])))
+    if draw(st.integers(0, 4)) == 0:
+        args.append("--seed=" + draw(st.sampled_from(["0", "-1", "2", str(2 ** 70), "x", "1.5"])))
+    if draw(st.integers(0, 4)) == 0:
+        args.append("--decimals=" + draw(st.sampled_from(["1", "2", "9", "10", "-1", "x"])))
+    out = draw(st.sampled_from(["{dir}/out/r", "{dir}/out/r", "{dir}/new/sub/r", "{dir}/out", "{dir}/out/.keep/r",
+                                "{dir}/out/r.csv"]))
+    args.append("--output=" + out)
+    return Case("rig", {"out/.keep": b""}, args)
+
+
 #: Every strategy, by test name (the benchmark runs them all).
 ALL_STRATEGIES = {"recording": recording_cases, "sidecar": sidecar_cases, "identify_options": identify_option_cases,
-                  "params": params_cases, "export_options": export_option_cases}
+                  "params": params_cases, "export_options": export_option_cases, "diagnose": diagnose_cases,
+                  "simulate": simulate_cases, "rig": rig_cases}
 
 
 # ----------------------------------------------------------------------------- the property
@@ -492,6 +645,99 @@ def _check_identify_output(stdout: str, as_json: bool) -> None:
             raise FuzzFailure(f"identify --json: tire {name}: k = {k!r}, c = {c!r}")
 
 
+def _identify_ok(where, argv, folder, new, stdout) -> None:
+    if new:
+        raise FuzzFailure(f"{where}: identify wrote {sorted(new)}")
+    _check_identify_output(stdout, "--json" in argv)
+
+
+def _export_ok(where, argv, folder, new, stdout) -> None:
+    fmu = [n for n in new if (folder / n).is_file()]
+    folders = {str(p) for p in Path(fmu[0]).parents if str(p) != "."} if len(fmu) == 1 else set()
+    if len(fmu) != 1 or not fmu[0].lower().endswith(".fmu") or set(new) - set(fmu) - folders:
+        raise FuzzFailure(f"{where}: export wrote {sorted(new)} (expected one FMU, and its folders)")
+    _check_fmu(where, folder / fmu[0])
+
+
+def _check_fmu(where, path: Path) -> None:
+    with zipfile.ZipFile(path) as z:
+        if "modelDescription.xml" not in z.namelist():
+            raise FuzzFailure(f"{where}: the FMU {path.name} has no modelDescription.xml")
+
+
+def _option(argv, name: str):
+    """The value of ``--name=VALUE`` in `argv` (the last one), or None."""
+    values = [a.split("=", 1)[1] for a in argv if a.startswith(name + "=")]
+    return values[-1] if values else None
+
+
+def _check_written(where, folder: Path, new: set, files: set) -> None:
+    """`new` (paths relative to `folder`) holds exactly `files` and the folders made for them."""
+    files = {str(Path(f).relative_to(folder)) for f in files}
+    folders = {str(p) for f in files for p in Path(f).parents if str(p) != "."}
+    missing = files - new
+    if missing or new - files - folders:
+        raise FuzzFailure(f"{where}: wrote {sorted(new)}, expected {sorted(files)} and their folders")
+
+
+def _json_or_text(where, stdout: str, as_json: bool):
+    if not as_json:
+        if not stdout.strip():
+            raise FuzzFailure(f"{where}: no output")
+        return None
+
+    def refuse(token):
+        raise FuzzFailure(f"{where}: --json wrote {token} (not JSON)")
+
+    return json.loads(stdout, parse_constant=refuse)
+
+
+def _diagnose_ok(where, argv, folder, new, stdout) -> None:
+    expected = {Path(p) for p in (_option(argv, "--plot"), _option(argv, "--fmu")) if p}
+    fmu_dir = _option(argv, "--fmu-dir")
+    if fmu_dir:
+        made = sorted(Path(fmu_dir).glob("*.fmu"))
+        if not made:
+            raise FuzzFailure(f"{where}: --fmu-dir wrote no FMU")
+        expected |= set(made)
+    _check_written(where, folder, new, expected)
+    for path in expected:
+        if path.suffix == ".fmu":
+            _check_fmu(where, path)
+    doc = _json_or_text(where, stdout, "--json" in argv)
+    if doc is not None:
+        for name, entry in (doc["tires"].items() if "tires" in doc else [(doc["tire"], doc)]):
+            k, c = entry["k"], entry["c"]
+            if not (math.isfinite(k) and k > 0 and math.isfinite(c) and c >= 0):
+                raise FuzzFailure(f"{where}: tire {name}: k = {k!r}, c = {c!r}")
+
+
+def _simulate_ok(where, argv, folder, new, stdout) -> None:
+    plot = _option(argv, "--plot")
+    _check_written(where, folder, new, {Path(plot)} if plot else set())
+    doc = _json_or_text(where, stdout, "--json" in argv)
+    if doc is not None and not (math.isfinite(doc["nrmse"]) and doc["nrmse"] >= 0):
+        raise FuzzFailure(f"{where}: nrmse = {doc['nrmse']!r}")
+
+
+def _rig_ok(where, argv, folder, new, stdout) -> None:
+    from identification.errors import InputError
+    from identification.recording import read_recording
+
+    paths = [Path(line) for line in stdout.splitlines()]
+    if len(paths) != 3 or [p.name.split(".", 1)[1] for p in paths] != ["csv", "json", "truth.json"]:
+        raise FuzzFailure(f"{where}: printed {stdout!r}, expected the paths of NAME.csv, .json and .truth.json")
+    _check_written(where, folder, new, set(paths))
+    try:
+        read_recording(paths[0])
+    except InputError as exc:
+        raise FuzzFailure(f"{where}: the rig wrote a recording that does not read back: {exc}") from None
+
+
+_SUCCESS = {"identify": _identify_ok, "export": _export_ok, "diagnose": _diagnose_ok, "simulate": _simulate_ok,
+            "rig": _rig_ok}
+
+
 def check_case(case: Case, details: dict | None = None) -> str:
     """Run `case` in a fresh folder; return ``"valid"`` or ``"error"``, or raise :class:`FuzzFailure`.
 
@@ -535,18 +781,9 @@ def check_case(case: Case, details: dict | None = None) -> str:
         if tb is not None:
             raise FuzzFailure(f"{where}: traceback\n{tb}")
         if status == 0:
-            if case.command == "identify":
-                if new:
-                    raise FuzzFailure(f"{where}: identify wrote {sorted(new)}")
-                _check_identify_output(stdout, "--json" in argv)
-            else:
-                fmu = [n for n in new if (folder / n).is_file()]
-                folders = {str(p) for p in Path(fmu[0]).parents if str(p) != "."} if len(fmu) == 1 else set()
-                if len(fmu) != 1 or not fmu[0].lower().endswith(".fmu") or set(new) - set(fmu) - folders:
-                    raise FuzzFailure(f"{where}: export wrote {sorted(new)} (expected one FMU, and its folders)")
-                with zipfile.ZipFile(folder / fmu[0]) as z:
-                    if "modelDescription.xml" not in z.namelist():
-                        raise FuzzFailure(f"{where}: the FMU has no modelDescription.xml")
+            if stderr.strip():
+                raise FuzzFailure(f"{where}: exit 0 with stderr {stderr!r}")
+            _SUCCESS[case.command](where, argv, folder, new, stdout)
             return "valid"
         if status != 2:
             raise FuzzFailure(f"{where}: exit status {status!r}; stderr {stderr!r}")
@@ -596,4 +833,22 @@ def test_export_mutated_params(case):
 @settings(CI, max_examples=80)
 @given(case=export_option_cases())
 def test_export_options(case):
+    check_case(case)
+
+
+@settings(CI, max_examples=40)
+@given(case=diagnose_cases())
+def test_diagnose_options(case):
+    check_case(case)
+
+
+@settings(CI, max_examples=60)
+@given(case=simulate_cases())
+def test_simulate_options(case):
+    check_case(case)
+
+
+@settings(CI, max_examples=100)
+@given(case=rig_cases())
+def test_rig_options(case):
     check_case(case)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import os
+import sys
+import time
 
 from ..cliutil import (add_example_option, check_folder, check_output, choose_tire, read_recording_arg,
                        write_files)
@@ -13,15 +15,42 @@ from ..preprocess import DEFAULT_CUTOFF_HZ
 __all__ = ["add_parser", "run_diagnosis", "run_tractor_diagnosis"]
 
 
-def _progress(desc: str):
-    """A progress callback drawing a bar on stderr (only on a terminal, after one second)."""
+class _Lines:
+    """Progress as plain lines on stderr: ``cleatfmu: diagnose: <elapsed> s: <stage>``."""
+
+    def __init__(self, desc: str):
+        self.desc, self.start, self.count = desc, time.perf_counter(), 0
+
+    def __call__(self, label: str) -> None:
+        self.count += 1
+        print(f"cleatfmu: {self.desc}: {time.perf_counter() - self.start:6.1f} s: step {self.count}: {label}",
+              file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        print(f"cleatfmu: {self.desc}: {time.perf_counter() - self.start:6.1f} s: done", file=sys.stderr, flush=True)
+
+
+def _progress(desc: str, *, long: bool = False):
+    """A progress callback and its closer: a bar on stderr on a terminal (after one second; at once for a long
+    recording), else for a long recording one plain line per stage on stderr, else nothing."""
     from tqdm import tqdm
-    bar = tqdm(desc=desc, unit="model", delay=1.0, disable=None, leave=False)
+
+    if long and not _is_terminal(sys.stderr):
+        lines = _Lines(desc)
+        return lines, lines
+    bar = tqdm(desc=desc, unit="model", delay=0.0 if long else 1.0, disable=None, leave=False)
 
     def tick(label):
         bar.set_postfix_str(label[:40], refresh=False)
         bar.update(1)
     return tick, bar
+
+
+def _is_terminal(stream) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):
+        return False
 
 
 def run_diagnosis(rec, tire: str, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_path=None, workers: int = 1,
@@ -85,8 +114,13 @@ def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=
 def _tractor_text(diag, gain, verbose: bool = False) -> str:
     doc = diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
     body = doc["body"]
-    lines = [f"{diag.problem.rec.source}: effects the four-corner model misses: "
-             f"{', '.join(diag.effects) or 'none'}"]
+    rec = diag.problem.rec
+    lines = [f"{rec.source}: effects the four-corner model misses: {', '.join(diag.effects) or 'none'}"]
+    if rec.record_span_s is not None:
+        lines.append(f"  analysed {rec.time_s[0]:.3f}-{rec.time_s[-1]:.3f} s of the {rec.record_span_s[0]:.3f}-"
+                     f"{rec.record_span_s[1]:.3f} s record (the cleat impacts and their free decay)")
+    if rec.decimated_from_hz is not None:
+        lines.append(f"  analysed at {rec.sample_rate_hz:.6g} Hz, decimated from {rec.decimated_from_hz:.6g} Hz")
     for effect in diag.effects:
         lines.append(f"  {effect}: {diag.evidence.get(effect, '')}")
     for name in ("pitch_index", "roll_index"):
@@ -117,8 +151,9 @@ def run(args) -> int:
     import tempfile
     from pathlib import Path
 
-    if args.workers < 1:
-        raise InputError("--workers", f"at least 1, got {args.workers}")
+    from ..plausibility import check_option
+
+    check_option("--workers", args.workers)
     check_output(args.plot, ".png", "plot", create=False)
     check_output(args.fmu, ".fmu", "FMU", create=False)
     if args.fmu_dir is not None:
@@ -127,8 +162,13 @@ def run(args) -> int:
     tire = choose_tire(rec, args.tire) if args.tire is not None or len(rec.tires) == 1 else None
     if args.fmu is not None and tire is None:
         raise InputError("--fmu", "names one tire's FMU: use it with --tire, or --fmu-dir for every tire")
+    from ..window import decimate, focus, is_long, window_json
+
+    long = is_long(rec)
+    rec = decimate(focus(rec, cutoff_hz=args.cutoff_hz), cutoff_hz=args.cutoff_hz)
+    long = long or rec.decimated_from_hz is not None
     keep_fmus = args.fmu is not None or args.fmu_dir is not None
-    tick, bar = _progress(f"diagnose {tire or 'tractor'}")
+    tick, bar = _progress(f"diagnose {tire or 'tractor'}", long=long)
     with tempfile.TemporaryDirectory(prefix="cleatfmu_fmus_") as tmp:
         try:
             diag, gain = run_tractor_diagnosis(rec, cutoff_hz=args.cutoff_hz, fmu_dir=tmp if keep_fmus else None,
@@ -149,6 +189,8 @@ def run(args) -> int:
     if args.json:
         doc = diag.tire_json(tire, nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after) if tire else \
             diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
+        if window_json(rec) is not None:
+            doc["analysis_window"] = window_json(rec)
         print(json.dumps(doc, indent=2))
     else:
         print(_tractor_text(diag, gain, args.verbose))

@@ -107,6 +107,23 @@ def _write(rig_run, stem: Path, decimals: int):
         raise
 
 
+def _check_options(args) -> None:
+    """Refuse a ``--speed`` that is no finite number in its plausible range, and a negative ``--seed``."""
+    import math
+
+    from ..errors import InputError
+
+    if args.speed is not None:
+        if not (math.isfinite(args.speed) and args.speed > 0):
+            raise InputError("--speed", f"must be a finite number > 0 km/h, got {args.speed!r}")
+        low, high, what = P.RANGES["speed_kmh"]
+        if not low <= args.speed <= high:
+            raise InputError("--speed", f"speed {args.speed:.6g} km/h is outside the plausible range "
+                                        f"{low:.6g}-{high:.6g} km/h ({what})")
+    if args.seed < 0:
+        raise InputError("--seed", f"must be >= 0, got {args.seed}")
+
+
 def run(args) -> int:
     """Run ``cleatfmu rig``; returns 0 (user errors raise InputError)."""
 
@@ -118,6 +135,7 @@ def run(args) -> int:
         _missing_folders(Path(args.output).parent)
     from .generate import run_rig  # the solver stack loads only when the rig runs
 
+    _check_options(args)
     overrides = _tire_names_upper(P.parse_assignments(args.param))
     if args.speed is not None:
         overrides["speed_kmh"] = args.speed

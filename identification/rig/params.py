@@ -14,7 +14,8 @@ from typing import Any
 
 from ..errors import InputError
 
-__all__ = ["EFFECTS", "PARAMS", "Param", "resolve", "parse_assignments", "parse_effects", "describe"]
+__all__ = ["EFFECTS", "PARAMS", "Param", "RANGES", "MAX_SAMPLES", "resolve", "parse_assignments", "parse_effects",
+           "describe"]
 
 TIRES = ("FL", "FR", "RL", "RR")
 
@@ -108,11 +109,64 @@ def _coerce(key: str, value: Any) -> Any:
     if spec.check.startswith("int"):
         if num != int(num) or num < int(spec.check[-1]):
             raise InputError("--param", f"{key} must be an integer >= {spec.check[-1]}, got {value!r}")
-        return int(num)
+        return int(_in_range(key, num))
     if spec.check == "positive" and num <= 0:
         raise InputError("--param", f"{key} must be > 0 {spec.unit}, got {value!r}")
     if spec.check == "nonnegative" and num < 0:
         raise InputError("--param", f"{key} must be >= 0 {spec.unit}, got {value!r}")
+    return _in_range(key, num)
+
+
+#: Plausible range (low, high, what) of each numeric option, in the option's unit; every default lies inside.
+#: The quantities a recording carries have the ranges of :data:`identification.plausibility.RANGES` (the rig
+#: shares no code with the pipeline but the recording format; ``tests/test_plausibility.py`` compares them).
+RANGES: dict[str, tuple[float, float, str]] = {
+    "speed_kmh": (0.5, 60.0, "a tractor's speed over a cleat"),
+    "duration_s": (1.0, 600.0, "the length of the recording"),
+    "t0_s": (0.0, 600.0, "the front axle's arrival at the cleat"),
+    "cleat.height_m": (0.002, 0.2, "a cleat's height"),
+    "cleat.width_m": (0.005, 1.0, "a cleat's width in the driving direction"),
+    "cleat.stagger_m": (-5.0, 5.0, "the right cleat beyond the left one"),
+    "vehicle.wheelbase_m": (0.5, 10.0, "a tractor's wheelbase"),
+    "vehicle.track_m": (0.5, 5.0, "a tractor's track width"),
+    "vehicle.mass_kg": (4 * 100.0 / 9.80665, 4 * 100e3 / 9.80665, "a tractor's mass"),
+    "tire.front.diameter_m": (0.2, 4.0, "a tractor tire's diameter"),
+    "tire.rear.diameter_m": (0.2, 4.0, "a tractor tire's diameter"),
+    "tire.front.lugs": (1, 200, "lug bars per circumference"),
+    "tire.rear.lugs": (1, 200, "lug bars per circumference"),
+    **{f"tire.{t}.load_N": (100.0, 100e3, "a tractor wheel's static load") for t in TIRES},
+    **{f"tire.{t}.k_N_m": (10e3, 10e6, "a tractor tire's vertical stiffness") for t in TIRES},
+    **{f"tire.{t}.c_Ns_m": (0.0, 100e3, "a tractor tire's vertical damping") for t in TIRES},
+    "enveloping.footprint_front_m": (0.01, 1.5, "a footprint's length"),
+    "enveloping.footprint_rear_m": (0.01, 1.5, "a footprint's length"),
+    "axle_coupling.pitch_dynamic_index": (0.05, 5.0, "a pitch dynamic index"),
+    "axle_coupling.roll_gyration_m": (0.05, 5.0, "a roll radius of gyration"),
+    "axle_coupling.front_axle_roll_inertia_kg_m2": (1.0, 1e4, "a front axle's roll inertia"),
+    "nonlinear_stiffness.exponent": (0.3, 4.0, "a progressive law's exponent"),
+    "friction_damping.force_N": (0.0, 1e4, "a tire's friction force"),
+    "friction_damping.slip_velocity_m_s": (1e-5, 1.0, "a friction law's velocity scale"),
+    "periodic_disturbance.amplitude_m": (0.0, 0.05, "a lug's road-equivalent amplitude"),
+    "periodic_disturbance.frequency_hz": (0.0, 500.0, "a lug-passing frequency"),
+    "sensor.rate_hz": (50.0, 100e3, "a hub accelerometer's sampling rate"),
+    "sensor.aa_order": (0, 12, "an anti-alias filter's order"),
+    "sensor.highpass_hz": (0.0, 10.0, "an AC coupling's corner, below the tire's mode"),
+    "sensor.noise_m_s2": (0.0, 10.0, "an accelerometer's noise RMS"),
+    "sensor.lsb_m_s2": (0.0, 1.0, "a quantization step"),
+    "solver.rtol": (1e-13, 1e-3, "the integrator's relative tolerance"),
+    "solver.oversample": (1, 64, "sensor-chain grid points per sample"),
+}
+#: The longest run, samples (duration x rate): what the solver and the sensor chain hold in memory.
+MAX_SAMPLES = 2_000_000
+
+
+def _in_range(key: str, num: float) -> float:
+    """`num` if within the plausible range of `key` (:data:`RANGES`), else InputError naming ``--param``."""
+    if key in RANGES:
+        low, high, what = RANGES[key]
+        if not low <= num <= high:
+            unit = "" if PARAMS[key].unit == "-" else f" {PARAMS[key].unit}"
+            raise InputError("--param", f"{key} {num:.6g}{unit} is outside the plausible range "
+                                        f"{low:.6g}-{high:.6g}{unit} ({what})")
     return num
 
 
@@ -123,6 +177,15 @@ def resolve(overrides: dict[str, Any] | None = None) -> dict[str, Any]:
         if key not in PARAMS:
             raise InputError("--param", f"unknown parameter {key!r} (cleatfmu rig --list-params shows them)")
         values[key] = _coerce(key, value)
+    from ..recording import MIN_SAMPLES
+
+    samples = values["duration_s"] * values["sensor.rate_hz"]
+    if samples > MAX_SAMPLES:
+        raise InputError("--param", f"duration_s x sensor.rate_hz = {samples:.6g} samples, more than the rig's "
+                                    f"{MAX_SAMPLES} (shorten the run or lower the rate)")
+    if samples < MIN_SAMPLES:
+        raise InputError("--param", f"duration_s x sensor.rate_hz = {samples:.6g} samples, fewer than a "
+                                    f"recording's {MIN_SAMPLES} (lengthen the run or raise the rate)")
     return values
 
 
