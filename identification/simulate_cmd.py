@@ -32,6 +32,7 @@ def _text(cmp, rec) -> str:
         lines.append(f"  {name:<12}{w.start_s:7.3f}{w.end_s:7.3f}{w.nrmse:8.1%}{w.error_to_noise:10.1f}"
                      f"{w.misfit_share:12.0%}")
     lines.append(f"  the simulation is most wrong in the {cmp.worst_window} window")
+    lines.extend(f"  warning: {w}" for w in cmp.warnings)
     return "\n".join(lines)
 
 

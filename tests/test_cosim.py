@@ -137,6 +137,11 @@ def test_an_alignment_at_its_search_limit_is_reported_as_a_warning(tire_fmu, bas
     stuck = replace(cmp, alignment_s=MAX_ALIGNMENT_S)
     assert stuck.alignment_at_limit and "search limit" in stuck.warnings[0] and "+30.0 ms" in stuck.warnings[0]
     assert stuck.to_json()["alignment_at_limit"] is True
+    from identification.simulate_cmd import _text
+
+    assert "warning: the alignment of simulated to measured acceleration reached its search limit" in \
+        _text(stuck, baseline_runs[7.0].recording)
+    assert "warning" not in _text(cmp, baseline_runs[7.0].recording)
 
 
 @pytest.mark.parametrize("method", ["paper", "waveform"])
