@@ -13,12 +13,34 @@
  * time, values (the variables, then the hidden state; native little-endian doubles). */
 #define SERIALIZED_SIZE (8 + KIND_BYTES + 4 + 8 * (1 + N_VALUES))
 
-typedef struct {
+/* A snapshot belongs to the instance that made it, in that instance's list: freeing the instance frees the
+ * snapshots the importer did not free (fmi2FreeInstance / fmi3FreeInstance free "all the allocated memory"). */
+typedef struct Snapshot {
     char magic[8];
     double time;
     int unchecked;
     double values[N_VALUES];
+    struct Snapshot *prev, *next;
+    CleatfmuInstance *owner;
 } Snapshot;
+
+static Snapshot *new_snapshot(CleatfmuInstance *s) {
+    Snapshot *snap = (Snapshot *)calloc(1, sizeof *snap);
+    if (snap == NULL) return NULL;
+    snap->owner = s;
+    snap->next = (Snapshot *)s->states;
+    if (snap->next) snap->next->prev = snap;
+    s->states = snap;
+    return snap;
+}
+
+static void delete_snapshot(Snapshot *snap) {
+    if (snap->prev) snap->prev->next = snap->next;
+    else snap->owner->states = snap->next;
+    if (snap->next) snap->next->prev = snap->prev;
+    memset(snap->magic, 0, 8);
+    free(snap);
+}
 
 int ci_load(CleatfmuInstance *s, const char *token, const char *resource_location, char *msg, size_t n) {
     if (cleatfmu_read_start_file(resource_location, s->token, s->values, msg, n)) return 1;
@@ -37,6 +59,7 @@ int ci_load(CleatfmuInstance *s, const char *token, const char *resource_locatio
 
 void ci_free(CleatfmuInstance *s) {
     if (s == NULL) return;
+    while (s->states) delete_snapshot((Snapshot *)s->states);
     cleatfmu_unload(s->data);
     s->data = NULL;
     s->free_memory(s);
@@ -180,7 +203,7 @@ int ci_get_state(CleatfmuInstance *s, const char *function, void **state) {
     if (!ci_allowed(s, function, CI_ANY_MODE)) return CI_ERROR;
     if (state == NULL) return ci_fail(s, "%s: NULL pointer", function);
     if (*state != NULL && !is_snapshot(*state)) return ci_fail(s, "%s: not an FMU state of this FMU", function);
-    snap = *state ? (Snapshot *)*state : (Snapshot *)calloc(1, sizeof *snap);
+    snap = *state ? (Snapshot *)*state : new_snapshot(s);
     if (snap == NULL) return ci_fail(s, "%s: out of memory", function);
     memcpy(snap->magic, STATE_MAGIC, 8);
     snap->time = s->time;
@@ -205,8 +228,7 @@ int ci_free_state(CleatfmuInstance *s, const char *function, void **state) {
     if (!ci_allowed(s, function, CI_ANY_MODE)) return CI_ERROR;
     if (state && *state) {
         if (!is_snapshot(*state)) return ci_fail(s, "%s: not an FMU state of this FMU", function);
-        memset(*state, 0, 8);
-        free(*state);
+        delete_snapshot((Snapshot *)*state);
         *state = NULL;
     }
     return CI_OK;
@@ -260,9 +282,12 @@ int ci_deserialize(CleatfmuInstance *s, const char *function, const unsigned cha
     for (vr = 0; vr < N_VARIABLES; vr++)
         if (cleatfmu_variables[vr].causality != VC_OUTPUT && cleatfmu_value_problem(vr, tmp.values[vr], msg, sizeof msg))
             return ci_fail(s, "%s: %s", function, msg);
-    snap = *state ? (Snapshot *)*state : (Snapshot *)malloc(sizeof *snap);
+    snap = *state ? (Snapshot *)*state : new_snapshot(s);
     if (snap == NULL) return ci_fail(s, "%s: out of memory", function);
-    memcpy(snap, &tmp, sizeof tmp);
+    memcpy(snap->magic, tmp.magic, 8);
+    snap->time = tmp.time;
+    snap->unchecked = tmp.unchecked;
+    memcpy(snap->values, tmp.values, sizeof tmp.values);
     *state = snap;
     return CI_OK;
 }

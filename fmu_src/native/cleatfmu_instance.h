@@ -47,12 +47,13 @@ typedef struct CleatfmuInstance {
     double start[N_VALUES];
     char token[CLEATFMU_GUID_SIZE];
     void *data;                    /* the kind's data from the resources (the road's profile), or NULL */
+    void *states;                  /* the FMU state snapshots not yet freed (freed with the instance) */
 } CleatfmuInstance;
 
 /* Read the start values of the FMU at `resource_location` and check `token` against
  * the FMU's; fills s->values, s->start (returns 0) or msg (returns 1). */
 int ci_load(CleatfmuInstance *s, const char *token, const char *resource_location, char *msg, size_t n);
-/* Free the instance and the kind's data (cleatfmu_load). */
+/* Free the instance, its FMU state snapshots not yet freed and the kind's data (cleatfmu_load). */
 void ci_free(CleatfmuInstance *s);
 /* Log a formatted error (category logStatusError) and return CI_ERROR. */
 int ci_fail(CleatfmuInstance *s, const char *fmt, ...);
