@@ -1,5 +1,6 @@
 """The whole tractor on a road profile: the seat's acceleration against python-control's frequency response."""
 
+import json
 import math
 
 import control
@@ -164,3 +165,26 @@ def test_fmu_set_takes_k_and_c_from_the_four_tire_fmus(tmp_path):
     (tmp_path / "day_RR.fmu").unlink()
     with pytest.raises(InputError, match=r"\*_RR\.fmu"):
         check_set_names([f"fmu={tmp_path}"])
+
+
+def test_params_set_takes_k_and_c_from_an_identify_json_of_the_four_tires(tmp_path, cli):
+    """params=FILE: the k and c of ``identify --json`` (here of the embedded day, paper's method), per tire;
+    a file lacking a tire is refused naming it."""
+    from identification.comfort.ride import _params_set, check_set_names
+    from identification.errors import InputError
+
+    res = cli("identify", "--example", "7kmh", "--json")
+    assert res.code == 0, res.err
+    path = tmp_path / "params.json"
+    path.write_text(res.out)
+    tires = json.loads(res.out)["tires"]
+    assert check_set_names([f"params={path}", "final"]) == [f"params={path}", "final"]
+    k, c = _params_set(f"params={path}")
+    assert k == {t: tires[t]["k"] for t in ("FL", "FR", "RL", "RR")}
+    assert c == {t: tires[t]["c"] for t in ("FL", "FR", "RL", "RR")}
+    doc = json.loads(res.out)
+    del doc["tires"]["RL"]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(InputError, match="no tire 'RL'") as info:
+        check_set_names([f"params={path}"])
+    assert str(path) in str(info.value)

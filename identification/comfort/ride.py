@@ -230,7 +230,8 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
     names : iterable of str
         ``final`` (the joint diagnosis's named model), ``paper`` (the paper's method per tire),
         ``waveform`` (the waveform fit per tire), ``static=K`` (every tire at K N/m, e.g. a compression
-        test's, with the final model's c), ``fmu=DIR`` (the k and c the four tire FMUs in DIR carry).
+        test's, with the final model's c), ``fmu=DIR`` (the k and c the four tire FMUs in DIR carry),
+        ``params=FILE`` (the k and c of an ``identify --json`` document of the four tires).
     diagnosis : TractorDiagnosis, optional
         The recording's joint diagnosis (run when not given).
     workers : int
@@ -265,6 +266,8 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
             sets[name] = final
         elif name.startswith("fmu="):
             sets[name] = _fmu_set(name)
+        elif name.startswith("params="):
+            sets[name] = _params_set(name)
         elif name in ("paper", "waveform"):
             if name == "paper":
                 from ..identify import identify as method
@@ -290,9 +293,11 @@ def check_set_names(names) -> list:
             _stiffness(name)
         elif name.startswith("fmu="):
             _fmu_set(name)
+        elif name.startswith("params="):
+            _params_set(name)
         elif name not in ("paper", "waveform", "final"):
             raise InputError("--compare", f"unknown parameter set {name!r} (paper, waveform, final, static=K, "
-                                          f"fmu=DIR)")
+                                          f"fmu=DIR, params=FILE)")
     return names
 
 
@@ -315,6 +320,20 @@ def _fmu_set(name: str) -> tuple:
             raise InputError(paths[t], f"not a cleatfmu tire FMU with stiffness and damping ({exc})") from None
         if not (math.isfinite(k[t]) and 1e4 <= k[t] <= 1e8 and math.isfinite(c[t]) and c[t] >= 0):
             raise InputError(paths[t], f"stiffness {k[t]:g} N/m, damping {c[t]:g} N s/m: not a tire's")
+    return k, c
+
+
+def _params_set(name: str) -> tuple:
+    """(k, c) per tire of ``params=FILE``: a ``cleatfmu identify --json`` document of all four tires (either
+    method), each tire's k and c checked as ``export`` checks them."""
+    from ..export import read_identified
+    from ..recording import TIRES
+
+    path = name.split("=", 1)[1]
+    k, c = {}, {}
+    for t in TIRES:
+        _, _, entry = read_identified(path, t)
+        k[t], c[t] = float(entry["k"]), float(entry["c"])
     return k, c
 
 

@@ -36,7 +36,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--compare", default=DEFAULT_COMPARE,
                    help="parameter sets, comma-separated: paper, waveform, final, static=K (K in N/m, or a "
                         "compression test CSV as for the static command), fmu=DIR (the k, c of the four tire "
-                        "FMUs in DIR, *_FL.fmu .. *_RR.fmu, as exported; "
+                        "FMUs in DIR, *_FL.fmu .. *_RR.fmu, as exported), params=FILE (the k, c of an "
+                        "'identify --json' file of the four tires); "
                         f"default {DEFAULT_COMPARE})")
     p.add_argument("--seed", type=int, default=1, help="seed of the road profile (default 1)")
     p.add_argument("--seat-x-m", type=float, default=None,
