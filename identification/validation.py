@@ -52,6 +52,9 @@ __all__ = ["DEFAULT_MAX_STEP_S", "MAX_ALIGNMENT_S", "Window", "Comparison", "sim
 DEFAULT_MAX_STEP_S = 2.5e-4
 _LEAD_S = 0.05
 _MAX_SHIFT_S = 0.03
+#: A window's RMS misfit beyond this multiple of the noise RMS is far from a model that explains the data.
+UNEXPLAINED_ERROR_TO_NOISE = 10.0
+
 #: Search limit of the (sub-sample) alignment of the simulated to the measured acceleration, s.
 MAX_ALIGNMENT_S = _MAX_SHIFT_S
 
@@ -109,11 +112,19 @@ class Comparison:
     @property
     def warnings(self) -> list:
         """Plain-language warnings about this comparison."""
+        out = []
         if self.alignment_at_limit:
-            return [f"the alignment of simulated to measured acceleration reached its search limit "
-                    f"({self.alignment_s * 1e3:+.1f} ms of ±{MAX_ALIGNMENT_S * 1e3:.0f} ms): the simulated impact "
-                    f"is out of phase with the measured one (check the impact time and the speed)"]
-        return []
+            out.append(f"the alignment of simulated to measured acceleration reached its search limit "
+                       f"({self.alignment_s * 1e3:+.1f} ms of ±{MAX_ALIGNMENT_S * 1e3:.0f} ms): the simulated "
+                       f"response is out of phase with the measured one (the impact time, the speed or the model "
+                       f"is wrong)")
+        worst = max((w.error_to_noise for w in self.windows.values()), default=0.0)
+        if self.extra.get("channels", 1) == 4 and worst > UNEXPLAINED_ERROR_TO_NOISE:
+            out.append(f"the misfit is {worst:.0f} x the noise in the {self.worst_window} window: on a "
+                       f"whole-tractor recording one corner under its own mass cannot follow a body that couples "
+                       f"the four tires; run 'cleatfmu diagnose' on the recording and simulate the four FMUs "
+                       f"under its body (--body DIAG.json)")
+        return out
 
     @property
     def worst_window(self) -> str:
@@ -250,4 +261,4 @@ def simulate_recording(fmu_path, rec: Recording, tire: str, *, cutoff_hz: float 
         k_fmu=float(cosim.parameters["stiffness"]), c_fmu=float(cosim.parameters["damping"]),
         k_reidentified=reid.k, c_reidentified=reid.c, decay_rate_measured=measured_decay,
         decay_rate_simulated=-reid.decay_rate, windows=windows, measured_signal=sig, simulated_signal=sim_sig,
-        cosim=cosim, method=method)
+        cosim=cosim, method=method, extra={"channels": len(rec.tires)})

@@ -144,6 +144,19 @@ def test_an_alignment_at_its_search_limit_is_reported_as_a_warning(tire_fmu, bas
     assert "warning" not in _text(cmp, baseline_runs[7.0].recording)
 
 
+def test_one_corner_on_the_whole_tractor_test_day_says_it_cannot_explain_it(tire_fmu):
+    """The embedded test day is a whole tractor (a rigid body couples the tires): one corner under its own
+    mass misses it by far more than the noise, and the comparison says so and what to run instead."""
+    from identification.examples import example_path
+    from identification.recording import read_recording
+
+    rec = read_recording(example_path("7kmh"))
+    cmp = simulate_recording(tire_fmu, rec, "FL")
+    assert max(w.error_to_noise for w in cmp.windows.values()) > 10
+    body = [w for w in cmp.warnings if "whole-tractor recording" in w]
+    assert body and "--body DIAG.json" in body[0], cmp.warnings
+
+
 @pytest.mark.parametrize("method", ["paper", "waveform"])
 def test_closure_reidentifies_the_fmu(tire_fmu, baseline_runs, method):
     rec = baseline_runs[7.0].recording
