@@ -148,12 +148,15 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
 
     rep = TireReport(recording=stem, tire=tire)
     fmu_dir = Path(out_dir) / "fmu"
+    from .window import focus, window_json
+
     rec = read_recording(csv_path)
     sig = None
     with _timed(rep.timings, "identify"):
         try:
+            rec = focus(rec, announce=False)
             sig = preprocess(rec, [tire])[tire]
-            paper = identify_paper(sig, rec.mass_kg(tire), source=rec.source)
+            paper = identify_paper(sig, rec.mass_kg(tire), source=rec.source, window=window_json(rec))
             rep.paper = dict(paper.to_json(), decay_rate=paper.decay_rate)
             rep.waveform = identify_waveform(sig, rec.mass_kg(tire), source=rec.source).to_json()
         except InputError as exc:

@@ -80,20 +80,24 @@ def format_table(rec, results) -> str:
 
 
 def cmd_identify(args) -> int:
-    rec = _recording_arg(args)
-    if args.method == "waveform":
-        from .waveform import identify_waveform_recording
-        results = identify_waveform_recording(rec, _tire_list(args.tire), cutoff_hz=args.cutoff_hz)
-    else:
-        from .identify import identify
+    from .graceful import Refusal, identify_channels
 
-        results = identify(rec, _tire_list(args.tire), cutoff_hz=args.cutoff_hz)
+    rec = _recording_arg(args)
+    results = identify_channels(rec, _tire_list(args.tire), cutoff_hz=args.cutoff_hz, method=args.method)
+    refused = [r for r in results.values() if isinstance(r, Refusal)]
+    identified = {name: r for name, r in results.items() if not isinstance(r, Refusal)}
+    if refused and not identified and all(r.fallback is None for r in refused):
+        raise InputError(rec.source, f"channel {refused[0].tire}: {refused[0].rule}")
     if args.json:
+        for r in refused:
+            print(f"cleatfmu: warning: {rec.source}: {r.sentence()}", file=sys.stderr)
         doc = {"recording": rec.source, "speed_kmh": rec.speed_kmh,
                "tires": {name: r.to_json() for name, r in results.items()}}
         print(json.dumps(doc, indent=2))
     else:
-        print(format_table(rec, results))
+        print(format_table(rec, identified))
+        for r in refused:
+            print(r.sentence())
     return 0
 
 

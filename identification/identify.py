@@ -144,7 +144,8 @@ def identify_paper(sig: TireSignal, mass_kg: float, *, source=None, window: dict
     """
     t, a = sig.peak_times_s, sig.peak_values_m_s2
     if t.size < 3:
-        raise InputError(source, f"channel {sig.tire}: fewer than 3 peaks")
+        raise InputError(source, f"channel {sig.tire}: fewer than 3 free-vibration peaks above the noise (found "
+                                 f"{t.size} between {sig.free_start_s:.3f} s and {sig.window_end_s:.3f} s)")
     period = float(t[1] - t[0])
     delta = float(math.log(a[0] / a[1]))
     if delta <= 0:

@@ -104,6 +104,9 @@ class Recording:
     decimated_from_hz : float or None
         When the samples were decimated for the analysis (:func:`identification.window.decimate`): the
         file's sampling rate, Hz; None: the file's samples.
+    conditioning : dict or None
+        What :func:`identification.condition.condition` found and removed (offsets, engine lines, flipped
+        signs, the speed from the front/rear delay); None: not conditioned.
     """
 
     time_s: np.ndarray
@@ -119,6 +122,7 @@ class Recording:
     acquisition: Acquisition | None = None
     record_span_s: tuple[float, float] | None = None
     decimated_from_hz: float | None = None
+    conditioning: dict | None = None
 
     def __post_init__(self):
         check_time(self.source, np.asarray(self.time_s, dtype=float))

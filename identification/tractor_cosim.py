@@ -211,7 +211,12 @@ class TractorGain:
 def _cosim_predict(fit, paths) -> dict:
     model = fit.model
     record = model.record(fit.params)
-    traj = run_tractor_fmus(paths, record, **dict(zip(("start_s", "step_s", "n"), model.grid(record))))
+    try:
+        traj = run_tractor_fmus(paths, record, **dict(zip(("start_s", "step_s", "n"), model.grid(record))))
+    except ValueError as exc:      # a fitted force law that never carries its load: say so, in one line
+        from .errors import InputError
+        raise InputError(model.problem.rec.source, f"the {fit.label} model's FMUs cannot start the "
+                                                   f"co-simulation: {exc}") from None
     return model.predict(fit.params, trajectory=traj)
 
 

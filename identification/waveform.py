@@ -147,13 +147,13 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
     window : dict, optional
         The window of a long recording the signal comes from (see :class:`PaperResult`).
     """
-    paper = identify_paper(sig, mass_kg, source=source)
     t = sig.time_s
+    if sig.peak_times_s.size == 0:
+        raise InputError(source, f"channel {sig.tire}: no free-vibration peak to start a waveform fit from")
     sel = (t >= sig.peak_times_s[0]) & (t <= sig.window_end_s)
     if sel.sum() < 20:
         raise InputError(source, f"channel {sig.tire}: free-decay window too short for a waveform fit")
-    sigma0 = -paper.decay_rate
-    wd0 = 2 * math.pi / paper.T
+    sigma0, wd0 = _seeds(sig, mass_kg, source)
     try:
         params, cov, r2, inflation = fit_free_decay(t[sel], sig.raw_m_s2[sel], sigma0=sigma0, omega_d0=wd0)
     except np.linalg.LinAlgError:  # e.g. accelerations so large that the sums of squares overflow
@@ -176,9 +176,23 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
     period = 2 * math.pi / wd
     return WaveformResult(
         tire=sig.tire, k=k, c=c, T=period, delta=sigma * period, zeta=sigma / math.sqrt(wn2),
-        omega_n=math.sqrt(wn2), r2=r2, n_peaks=paper.n_peaks, mass=mass_kg, decay_rate=-sigma,
+        omega_n=math.sqrt(wn2), r2=r2, n_peaks=int(sig.peak_times_s.size), mass=mass_kg, decay_rate=-sigma,
         k_ci=(k - hk, k + hk), c_ci=(c - hc, c + hc), n_samples=int(sel.sum()),
         window_s=(float(t[sel][0]), float(t[sel][-1])), variance_inflation=inflation, window=window)
+
+
+def _seeds(sig: TireSignal, mass_kg: float, source) -> tuple[float, float]:
+    """Starting decay rate (1/s) and damped frequency (rad/s): the paper's values where its rules are met;
+    else the spectral peak and the decrement of the first two peaks (or a damping ratio of 0.1)."""
+    try:
+        paper = identify_paper(sig, mass_kg, source=source)
+        return -paper.decay_rate, 2 * math.pi / paper.T
+    except InputError:
+        wd0 = 2 * math.pi * sig.dominant_hz
+        a, t = sig.peak_values_m_s2, sig.peak_times_s
+        if a.size >= 2 and 0 < a[1] < a[0]:
+            return math.log(a[0] / a[1]) / float(t[1] - t[0]), wd0
+        return 0.1 * wd0, wd0
 
 
 def identify_waveform_recording(rec: Recording, tires=None, *,
@@ -186,11 +200,12 @@ def identify_waveform_recording(rec: Recording, tires=None, *,
     """Preprocess a recording and fit every requested tire's free decay.
 
     A long recording is analysed on its impact window, as by :func:`identification.identify.identify`.
+    The fit needs one free-vibration peak above the noise, not the paper's three.
     """
     from .window import focus, window_json
 
     rec = focus(rec, cutoff_hz=cutoff_hz)
-    signals = preprocess(rec, tires, cutoff_hz=cutoff_hz)
+    signals = preprocess(rec, tires, cutoff_hz=cutoff_hz, min_peaks=1)
     window = window_json(rec)
     return {name: identify_waveform(sig, rec.mass_kg(name), source=rec.source, window=window)
             for name, sig in signals.items()}

@@ -157,7 +157,11 @@ def impact_window(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ) -> tu
 
 
 def focus(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce: bool = True) -> Recording:
-    """`rec` itself, or for a long recording (:func:`is_long`) its impact window.
+    """The recording to analyse: for a long recording (:func:`is_long`) its impact window; conditioned.
+
+    Every analysis starts here.  After the window, the recording is conditioned
+    (:func:`identification.condition.condition`: offsets and drifts, engine lines and flipped signs
+    removed, the speed checked against the front/rear delay).  Calling it again returns its input.
 
     Parameters
     ----------
@@ -165,15 +169,22 @@ def focus(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce: boo
     cutoff_hz : float
         Low-pass cut-off of the analysis, Hz.
     announce : bool
-        Print a note naming the window on stderr (``cleatfmu: note: ...``).
+        Print a note naming the window and the conditioning's warnings on stderr (``cleatfmu: note: ...``).
 
     Returns
     -------
     Recording
-        The window (its ``record_span_s`` is the file's span), or `rec` unchanged when it is not
-        long or no impact stands out (the analysis then reports that itself).
+        The window (its ``record_span_s`` is the file's span), or all of `rec` when it is not long or
+        no impact stands out (the analysis then reports that itself); conditioned.
     """
-    if not is_long(rec) or rec.record_span_s is not None:
+    from .condition import condition
+
+    return condition(_window(rec, cutoff_hz, announce), cutoff_hz=cutoff_hz, announce=announce)
+
+
+def _window(rec: Recording, cutoff_hz: float, announce: bool) -> Recording:
+    """The impact window of a long recording, or `rec`."""
+    if not is_long(rec) or rec.record_span_s is not None or rec.conditioning is not None:
         return rec
     span = impact_window(rec, cutoff_hz=cutoff_hz)
     if span is None:
@@ -246,18 +257,24 @@ def decimate(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce: 
 
 
 def window_json(rec: Recording) -> dict | None:
-    """What part of the file was analysed, or None for all of it, as recorded.
+    """What part of the file was analysed and how it was conditioned, or None for all of it, as recorded.
 
     Returns
     -------
     dict or None
         ``{"analysed_s": [start, end], "record_s": [start, end]}`` for a window of a long recording,
-        with ``"sampling_rate_hz"`` and ``"decimated_from_hz"`` for decimated samples.
+        with ``"sampling_rate_hz"`` and ``"decimated_from_hz"`` for decimated samples; ``"conditioning"``
+        (:func:`identification.condition.conditioning_json`) when conditioning found something.
     """
+    from .condition import conditioning_json
+
+    cond = conditioning_json(rec)
     if rec.record_span_s is None and rec.decimated_from_hz is None:
-        return None
+        return None if cond is None else {"conditioning": cond}
     span = rec.record_span_s or (float(rec.time_s[0]), float(rec.time_s[-1]))
     doc = {"analysed_s": [float(rec.time_s[0]), float(rec.time_s[-1])], "record_s": [float(v) for v in span]}
     if rec.decimated_from_hz is not None:
         doc.update(sampling_rate_hz=float(rec.sample_rate_hz), decimated_from_hz=float(rec.decimated_from_hz))
+    if cond is not None:
+        doc["conditioning"] = cond
     return doc

@@ -6,7 +6,7 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import analytic_recording, rewrite_sidecar
+from conftest import analytic_recording, rewrite_sidecar, true_k
 
 from identification.recording import write_recording
 
@@ -173,10 +173,28 @@ def test_no_detectable_impact(cli, tmp_path):
     _assert_user_error(cli("identify", csv_path), "flat.csv", "channel FL: no detectable cleat impact")
 
 
-def test_fewer_than_three_peaks(cli, tmp_path):
-    rec = analytic_recording(tires=("FL",), modes={"FL": (21.65, 0.45)})  # heavily damped
+def test_fewer_than_three_peaks_says_which_rule_and_gives_the_waveform_fit(cli, tmp_path):
+    """A tire damped so much (zeta 0.45) that two peaks stand above the noise: the paper's rule is named,
+    and the waveform fit on that decay gives k and c with an interval holding the truth."""
+    wn, zeta = 21.65, 0.45
+    rec = analytic_recording(tires=("FL", "RL"), modes={"FL": (wn, zeta), "RL": (16.0, 0.05)}, noise=0.02)
     csv_path = write_recording(rec, tmp_path / "damped")
-    _assert_user_error(cli("identify", csv_path), "damped.csv", "channel FL: fewer than 3 free-vibration peaks")
+    res = cli("identify", csv_path, "--json")
+    assert res.code == 0, res.err
+    assert "cleatfmu: warning:" in res.err and "FL: not identified: fewer than 3 free-vibration peaks" in res.err
+    doc = json.loads(res.out)["tires"]
+    assert doc["RL"]["k"] == pytest.approx(true_k("RL", (16.0, 0.05)), rel=0.01)     # the other channel as usual
+    fl = doc["FL"]
+    assert fl["refused"].startswith("fewer than 3 free-vibration peaks above the noise (found ")
+    assert "cleatfmu diagnose" in fl["advice"] and fl["fallback"]["method"] == "waveform"
+    mass = rec.mass_kg("FL")
+    k_true, c_true = true_k("FL", (wn, zeta)), 2 * mass * zeta * wn
+    fb = fl["fallback"]
+    assert fb["k"] == pytest.approx(k_true, rel=0.02) and fb["c"] == pytest.approx(c_true, rel=0.05)
+    assert fb["k_ci"][0] <= k_true <= fb["k_ci"][1] and fb["c_ci"][0] <= c_true <= fb["c_ci"][1]
+    text = cli("identify", csv_path)
+    assert text.code == 0 and "FL: not identified: fewer than 3 free-vibration peaks" in text.out
+    assert "waveform fit on the decay there is" in text.out
 
 
 def test_clipped_signal(cli, tmp_path):

@@ -210,7 +210,7 @@ def fake_diagnosis(monkeypatch):
         doc = {"body": {"pitch_index": None, "roll_index": None, "front_axle": "rigid",
                         "speed_m_s": {"sidecar": 7 / 3.6, "from_delay": None}},
                "tires": {}, "intervals": "stand-in"}
-        diag = SimpleNamespace(problem=SimpleNamespace(rec=rec), effects=[], evidence={}, seconds=4.25,
+        diag = SimpleNamespace(problem=SimpleNamespace(rec=rec), effects=[], extra={}, evidence={}, seconds=4.25,
                                to_json=lambda **kw: doc, tire_json=lambda tire, **kw: {"tire": tire})
         gain = SimpleNamespace(nrmse_before={}, nrmse_after={}, agreement=1e-9, fmu_paths=paths, seconds=1.5)
         return diag, gain

@@ -175,6 +175,12 @@ def run(args) -> int:
                                                workers=args.workers, progress=tick)
         finally:
             bar.close()
+        refit = diag.extra.get("speed_refit")
+        if refit:
+            print(f"cleatfmu: warning: {rec.source}: the fitted front/rear delay gives "
+                  f"{refit['from_delay_m_s'] * 3.6:.3g} km/h, the sidecar {refit['sidecar_m_s'] * 3.6:.3g} km/h "
+                  f"({100 * (refit['from_delay_m_s'] / refit['sidecar_m_s'] - 1):+.1f} %): fitted again at the "
+                  f"delay's speed", file=sys.stderr)
         files = {}
         if args.fmu is not None:
             own = next(p for p in gain.fmu_paths if p.stem.endswith(f"_{tire}"))

@@ -135,12 +135,22 @@ class TractorDiagnosis:
                 "body": {"pitch_index": value("pitch_index"), "roll_index": value("roll_index"),
                          "front_axle": "pivot" if "front_axle_pivot" in self.effects else "rigid",
                          "pivot_index": value("pivot_index"),
-                         "speed_m_s": {"sidecar": float(rec.speed_m_s),
-                                       "from_delay": float(rec.wheelbase_m / delay) if delay else None}},
+                         "speed_m_s": self.speed_json()},
                 "tires": tires, "evidence": dict(self.evidence),
                 "acquisition": rec.acquisition.to_json() if rec.acquisition is not None else None,
                 "intervals": "conditional on the model: it leaves a residual above the noise floor"
                              if self.conditional else "the model explains the data to within noise"}
+
+    def speed_json(self) -> dict:
+        """The speeds, m/s: the sidecar's, the impact onsets' (conditioning), the one analysed with, and the
+        fitted front/rear delay's (wheelbase / delay; the footprint modelled)."""
+        rec, delay = self.problem.rec, self.final.params.get("delay")
+        cond = (rec.conditioning or {}).get("speed", {})
+        refit = self.extra.get("speed_refit") or {}
+        sidecar = refit.get("sidecar_m_s", cond.get("sidecar_m_s", rec.speed_m_s))
+        return {"sidecar": float(sidecar), "from_onsets": cond.get("from_delay_m_s"),
+                "analysed_with": float(rec.speed_m_s),
+                "from_delay": float(rec.wheelbase_m / delay) if delay else None}
 
     def tire_json(self, tire: str, *, nrmse_before: dict | None = None, nrmse_after: dict | None = None) -> dict:
         """One tire in the per-tire ``diagnose --tire`` shape, from the joint fit."""
@@ -229,9 +239,14 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     (:func:`~identification.diagnose.joint_start.rescue_start`), and the run
     with the lower BIC is kept (``extra["rescue"]`` says which).
 
+    When the fitted front/rear delay implies a speed more than :data:`SPEED_REFIT` off the sidecar's
+    (a GPS speed a few percent off), the diagnosis is fitted again at the delay's speed
+    (``extra["speed_refit"]`` says so; :meth:`TractorDiagnosis.speed_json` reports both speeds).
+
     Parameters
     ----------
     rec : Recording
+        Focused and conditioned here unless it was already (:func:`identification.window.focus`).
     cutoff_hz : float
         Low-pass cut-off of the comparison, Hz.
     effects : iterable of str
@@ -243,6 +258,33 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     channels : iterable of str, optional
         Channels to use (default: all recorded).
     """
+    from dataclasses import replace
+
+    from ..window import focus
+
+    t0 = time.perf_counter()
+    rec = focus(rec, cutoff_hz=cutoff_hz, announce=False)   # itself when the caller focused it
+    diag = _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels)
+    delay = diag.final.params.get("delay")
+    if delay and abs(rec.wheelbase_m / delay / rec.speed_m_s - 1) > SPEED_REFIT:
+        # the fitted front/rear delay says the sidecar's speed is off: the cleat's crossing time and the
+        # footprint's passage scale with the speed, so fit again at the delay's speed
+        (progress or (lambda label: None))("refit at the speed of the fitted front/rear delay")
+        first = diag
+        diag = _diagnose_once(replace(rec, speed_m_s=rec.wheelbase_m / delay), cutoff_hz, effects, progress,
+                              workers, channels)
+        diag.extra["speed_refit"] = {"sidecar_m_s": float(rec.speed_m_s),
+                                     "from_delay_m_s": float(rec.wheelbase_m / delay),
+                                     "first_effects": list(first.effects)}
+    return replace(diag, seconds=time.perf_counter() - t0)
+
+
+#: Relative difference between the sidecar's speed and the fitted front/rear delay's above which the
+#: diagnosis is fitted again at the delay's speed.
+SPEED_REFIT = 0.02
+
+
+def _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels) -> TractorDiagnosis:
     from ..workers import process_pool, stop_pool
 
     t0 = time.perf_counter()

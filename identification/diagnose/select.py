@@ -210,6 +210,9 @@ def diagnose(rec, tire: str, *, cutoff_hz: float = 100.0, progress=None, effects
         Processes that fit a round's candidates in parallel (1: in this process).
     """
     t0 = time.perf_counter()
+    from ..window import focus
+
+    rec = focus(rec, cutoff_hz=cutoff_hz, announce=False)   # itself when the caller focused it
     pb = Problem.from_recording(rec, tire, cutoff_hz=cutoff_hz)
     tick = progress or (lambda label: None)
     start0 = _starting_values(pb)

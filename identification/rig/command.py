@@ -57,7 +57,7 @@ def _tire_names_upper(assignments: dict[str, str]) -> dict[str, str]:
         parts = key.split(".")
         if len(parts) == 3 and parts[0] == "tire":
             key = ".".join((parts[0], parts[1].upper(), parts[2]))
-        if key == "sensor.channels":
+        if key in ("sensor.channels", "sensor.flipped"):
             value = value.upper()
         out[key] = value
     return out

@@ -18,6 +18,7 @@ from ..errors import InputError
 from .._files import atomic_write_texts
 from ..recording import Acquisition, Recording, format_recording
 from . import params as P
+from .artifacts import active, artifact_rng, engine_vibration, sensor_artifacts
 from .road import RoadInput
 from .sensor import apply_chain, chain_modes
 from .solver import hub_acceleration_on_grid, integrate
@@ -37,6 +38,7 @@ class RigRun:
     recording: Recording
     truth: dict
     accel_true_m_s2: np.ndarray   # (4, n) hub acceleration before the sensor chain, at the sample times
+    #                               (the vehicle's response: without the engine vibration)
 
 
 def _check_consistency(v: dict) -> None:
@@ -110,21 +112,28 @@ def run_rig(effects=(), overrides: dict | None = None, *, seed: int = 0) -> RigR
     aa_cut = v["sensor.aa_cutoff_hz"] or fs / 4
     poles, res, direct = chain_modes(int(v["sensor.aa_order"]), aa_cut, v["sensor.highpass_hz"])
     measured = apply_chain(acc, t_start, h, cuts, poles, res, direct)
+    a_rng = artifact_rng(seed)
+    engine, engine_info = engine_vibration(t_start + h * np.arange(n_nodes), v, a_rng)
+    if engine_info:  # the chain is linear: the engine's smooth vibration passes it on its own
+        measured += apply_chain(engine, t_start, h, [], poles, res, direct)
     pick = slice(n_pre, None, over)
     y = measured[:, pick]
+    time = np.arange(n_samples) / fs
+    channels = v["sensor.channels"].split(",")
+    y, sensor_info = sensor_artifacts(y, time, TIRES, v, a_rng)
     y = y + v["sensor.noise_m_s2"] * rng.standard_normal(y.shape)
     if v["sensor.lsb_m_s2"] > 0:
         y = v["sensor.lsb_m_s2"] * np.round(y / v["sensor.lsb_m_s2"])
-    time = np.arange(n_samples) / fs
-    channels = v["sensor.channels"].split(",")
     rec = Recording(
-        time_s=time, accel_m_s2={c: y[TIRES.index(c)] for c in channels}, speed_m_s=speed,
+        time_s=time, accel_m_s2={c: y[TIRES.index(c)] for c in channels}, speed_m_s=speed * (1 + v["speed_error"]),
         cleat_height_m=v["cleat.height_m"], cleat_width_m=v["cleat.width_m"], wheelbase_m=L,
         wheel_load_N={c: v[f"tire.{c}.load_N"] for c in channels},
         description="virtual cleat-test rig recording", source="<rig>",
         acquisition=Acquisition(int(v["sensor.aa_order"]), float(aa_cut) if v["sensor.aa_order"] else 0.0,
                                 float(v["sensor.highpass_hz"])))
     truth = _truth(v, effects, seed, plant, road, traj, t_end)
+    truth["artifacts"] = dict(active(v), **engine_info, **sensor_info)
+    truth["speed_m_s"] = speed
     return RigRun(recording=rec, truth=truth, accel_true_m_s2=acc[:, pick])
 
 

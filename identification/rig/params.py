@@ -29,7 +29,7 @@ class Param:
     default: Any
     unit: str
     description: str
-    check: str = "positive"  # positive | nonnegative | int>=0 | int>=1 | flag (0 or 1) | channels | any
+    check: str = "positive"  # positive | nonnegative | int>=0 | int>=1 | flag (0 or 1) | channels | channels? | any
 
 
 def _table() -> dict[str, Param]:
@@ -80,6 +80,20 @@ def _table() -> dict[str, Param]:
         "sensor.noise_m_s2": Param(0.05, "m/s2", "white measurement noise RMS", "nonnegative"),
         "sensor.lsb_m_s2": Param(0.0, "m/s2", "quantization step (0: none)", "nonnegative"),
         "sensor.channels": Param("FL,FR,RL,RR", "-", "recorded channels", "channels"),
+        # Field artifacts: each is off at its default (see :mod:`identification.rig.artifacts`).
+        "engine.frequency_hz": Param(0.0, "Hz", "engine vibration at the hubs: firing frequency, independent of "
+                                                "speed (typically 25-80 Hz; 0: off)", "nonnegative"),
+        "engine.amplitude_m_s2": Param(1.0, "m/s2", "engine vibration: amplitude of the first order at the hubs "
+                                                    "(order m has amplitude / m)", "nonnegative"),
+        "engine.orders": Param(3, "-", "engine vibration: number of orders (1, 2, ... x the frequency)", "int>=1"),
+        "sensor.offset_m_s2": Param(0.0, "m/s2", "DC offset of every channel after the AC coupling (the "
+                                                 "amplifier's), drawn per channel within +-this", "nonnegative"),
+        "sensor.drift_m_s2_per_s": Param(0.0, "m/s2/s", "slow linear drift of every channel, drawn per channel "
+                                                        "within +-this", "nonnegative"),
+        "sensor.flipped": Param("", "-", "channels whose accelerometer is mounted upside down (sign reversed), "
+                                         "e.g. FR or FL,RR", "channels?"),
+        "speed_error": Param(0.0, "-", "relative error of the speed written in the sidecar (GPS): 0.05 writes "
+                                       "1.05 x the true speed", "any"),
         "solver.rtol": Param(1e-9, "-", "relative tolerance of the DOP853 integrator"),
         "solver.oversample": Param(4, "-", "sensor-chain grid points per sample", "int>=1"),
     })
@@ -91,8 +105,10 @@ PARAMS: dict[str, Param] = _table()
 
 def _coerce(key: str, value: Any) -> Any:
     spec = PARAMS[key]
-    if spec.check == "channels":
-        names = [s.strip() for s in str(value).split(",") if s.strip()]
+    if spec.check in ("channels", "channels?"):
+        names = [s.strip().upper() for s in str(value).split(",") if s.strip()]
+        if spec.check == "channels?" and not names:
+            return ""
         if not names or any(n not in TIRES for n in names) or len(set(names)) != len(names):
             raise InputError("--param", f"{key} must be a comma-separated subset of FL,FR,RL,RR, got {value!r}")
         return ",".join(names)
@@ -152,6 +168,12 @@ RANGES: dict[str, tuple[float, float, str]] = {
     "sensor.highpass_hz": (0.0, 10.0, "an AC coupling's corner, below the tire's mode"),
     "sensor.noise_m_s2": (0.0, 10.0, "an accelerometer's noise RMS"),
     "sensor.lsb_m_s2": (0.0, 1.0, "a quantization step"),
+    "engine.frequency_hz": (0.0, 500.0, "an engine's firing frequency"),
+    "engine.amplitude_m_s2": (0.0, 100.0, "engine vibration at a hub"),
+    "engine.orders": (1, 20, "engine orders"),
+    "sensor.offset_m_s2": (0.0, 100.0, "an accelerometer's DC offset"),
+    "sensor.drift_m_s2_per_s": (0.0, 10.0, "an accelerometer's drift"),
+    "speed_error": (-0.3, 0.3, "a GPS speed's relative error"),
     "solver.rtol": (1e-13, 1e-3, "the integrator's relative tolerance"),
     "solver.oversample": (1, 64, "sensor-chain grid points per sample"),
 }
