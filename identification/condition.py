@@ -5,10 +5,11 @@ calls it), in this order:
 
 1. **Engine harmonics.**  A steady spectral line in :data:`ENGINE_BAND_HZ` (below 0.45 fs; the tires
    and the lugs ring below it at test speeds) that stands :data:`LINE_PROMINENCE` x above its spectral
-   neighbourhood on every channel is engine vibration: its frequency is refined on all channels
-   together, its orders (2, 3, ... x; :data:`ORDER_PROMINENCE` x above their neighbourhood) searched,
-   and each line's least-squares sinusoid (amplitude and phase per channel, fitted away from the
-   impacts beside a constant and a drift) is subtracted.  It goes first: its vibration hides the
+   neighbourhood on every channel is engine vibration: its orders (2, 3, ... x; :data:`ORDER_PROMINENCE`
+   x above their neighbourhood) are searched, its frequency refined on all orders and channels together,
+   and each order's least-squares sinusoid (amplitude and phase per channel, fitted away from the
+   impacts beside a constant and a drift, on the channels high-passed at half the band's lower end with
+   zero phase, its gain divided out) is subtracted.  It goes first: its vibration hides the
    quiet stretches the next steps look for.
 2. **Offset and drift.**  Before the first impact and at the end of the record the hub's acceleration
    is noise (and any steady vibration) about zero: the line through the means of these quiet ends is
@@ -130,22 +131,27 @@ def _amplitude_spectrum(x: np.ndarray, fs: float, pad: int = 4) -> tuple[np.ndar
     return np.fft.rfftfreq(nfft, 1 / fs), spec
 
 
-def _line_fit(t: np.ndarray, channels: np.ndarray, f: float) -> tuple[np.ndarray, float]:
-    """Least-squares sinusoid at `f` per channel, beside a constant and a drift: (cos and sin coefficients
-    (ch, 2), total power of the fitted sinusoids)."""
-    arg = 2 * np.pi * f * t
-    basis = np.stack([np.cos(arg), np.sin(arg), np.ones_like(t), t - t.mean()], axis=1)
+def _line_fit(t: np.ndarray, channels: np.ndarray, f: float, orders=(1,)) -> tuple[np.ndarray, float]:
+    """Least-squares sinusoids at ``m f`` for every m of `orders`, per channel, beside a constant and a drift:
+    (cos and sin coefficients (orders, ch, 2), total power of the fitted sinusoids)."""
+    cols = []
+    for m in orders:
+        arg = 2 * np.pi * m * f * t
+        cols += [np.cos(arg), np.sin(arg)]
+    k = len(cols)
+    basis = np.stack(cols + [np.ones_like(t), t - t.mean()], axis=1)
     coef, *_ = np.linalg.lstsq(basis, channels.T, rcond=None)
-    fitted = basis[:, :2] @ coef[:2]
-    return coef[:2].T, float(np.sum(fitted * fitted))
+    fitted = basis[:, :k] @ coef[:k]
+    return coef[:k].T.reshape(channels.shape[0], len(orders), 2).transpose(1, 0, 2), float(np.sum(fitted * fitted))
 
 
-def _refine(t: np.ndarray, channels: np.ndarray, f0: float, width: float) -> float:
-    """The frequency within ``f0 +- width`` of the largest least-squares line power on all channels."""
+def _refine(t: np.ndarray, channels: np.ndarray, f0: float, width: float, orders=(1,)) -> float:
+    """The fundamental within ``f0 +- width`` of the largest least-squares power of its `orders` on all
+    channels."""
     from scipy.optimize import minimize_scalar
 
-    res = minimize_scalar(lambda f: -_line_fit(t, channels, f)[1], bounds=(f0 - width, f0 + width),
-                          method="bounded", options={"xatol": 1e-6})
+    res = minimize_scalar(lambda f: -_line_fit(t, channels, f, orders)[1], bounds=(f0 - width, f0 + width),
+                          method="bounded", options={"xatol": 1e-7})
     return float(res.x)
 
 
@@ -180,7 +186,16 @@ def _engine_lines(t, channels, fs, cutoff_hz, keep) -> list[dict]:
     ok, _ = _prominent(freq, specs, f1, half_bin)
     if not ok:
         return []
-    t, channels = t[keep], channels[:, keep]
+    # fit on the channels high-passed below the band (zero-phase, so a line keeps its phase and loses only
+    # the known gain): the tires' ringing, cut off at the masked impacts, would leak into the lines
+    from scipy import signal
+
+    sos = signal.butter(4, 0.5 * lo, btype="highpass", fs=fs, output="sos")
+    t, channels = t[keep], signal.sosfiltfilt(sos, channels, axis=1)[:, keep]
+
+    def gain(f):
+        return float(np.abs(signal.sosfreqz(sos, worN=[f], fs=fs)[1][0]) ** 2)
+
     f1 = _refine(t, channels, f1, 2 * half_bin)
     # a lower line whose orders this one is (a 2nd or 3rd order stronger than the first)
     for div in (3, 2):
@@ -188,15 +203,15 @@ def _engine_lines(t, channels, fs, cutoff_hz, keep) -> list[dict]:
         if fd >= lo and _prominent(freq, specs, fd, half_bin)[0]:
             f1 = _refine(t, channels, fd, 2 * half_bin / div)
             break
-    for order in range(1, MAX_ORDERS + 1):
-        f = order * f1
-        if f > hi:
-            break
-        if order > 1 and not _prominent(freq, specs, f, half_bin, ORDER_PROMINENCE)[0]:
-            continue
-        f = f if order == 1 else _refine(t, channels, f, 2 * half_bin)
-        coef, _ = _line_fit(t, channels, f)
-        lines.append({"frequency_hz": f, "order": order, "coef": coef,
+    orders = [m for m in range(1, MAX_ORDERS + 1) if m * f1 <= hi
+              and (m == 1 or _prominent(freq, specs, m * f1, half_bin, ORDER_PROMINENCE)[0])]
+    # the fundamental refined on all its orders together (the higher ones carry its phase faster), then
+    # every order's sinusoid fitted jointly
+    f1 = _refine(t, channels, f1, 2 * half_bin / max(orders), orders)
+    coefs, _ = _line_fit(t, channels, f1, orders)
+    for m, coef in zip(orders, coefs):
+        coef = coef / gain(m * f1)
+        lines.append({"frequency_hz": m * f1, "order": m, "coef": coef,
                       "amplitude_m_s2": [float(np.hypot(*c)) for c in coef]})
     return lines
 

@@ -139,12 +139,13 @@ class TireFmu:
         """The tire knows the cleat itself (a built-in cleat): pass a flat road and x (after initialize)."""
         return self.longitudinal and self.parameters().get("cleat_height", 0.0) > 0.0
 
-    def inputs(self, n, start, h, *, arrival_s, speed_m_s, cleat_height_m, cleat_width_m):
-        """Road and longitudinal inputs for this tire on the grid (after initialize)."""
+    def inputs(self, n, start, h, *, arrival_s, speed_m_s, cleat_height_m, cleat_width_m, profile=None):
+        """Road and longitudinal inputs for this tire on the grid (after initialize); an external cleat of
+        `profile` (:class:`identification.cleat.CleatProfile`) when given and not rectangular."""
         params = self.parameters()
         return tire_inputs(n, start, h, arrival_s=arrival_s, speed_m_s=speed_m_s, cleat_height_m=cleat_height_m,
                            cleat_width_m=cleat_width_m, external_cleat=not self.builtin_cleat(),
-                           x_offset_m=params.get("cleat_x", 0.0))
+                           x_offset_m=params.get("cleat_x", 0.0), profile=profile)
 
     def force_fn(self):
         """The force callback of :mod:`identification.scheme`: ``force(z, vz, x, vx, road_z, road_vz) -> N``,
@@ -251,7 +252,8 @@ def _check_run(max_step_s, duration_s, speed_m_s):
 
 def run_quarter_tractor(fmu_path, *, mass_kg: float, speed_m_s: float, cleat_height_m: float,
                         cleat_width_m: float, arrival_s: float, t0_s: float, duration_s: float,
-                        max_step_s: float, start_values: dict | None = None, step_s: float | None = None):
+                        max_step_s: float, start_values: dict | None = None, step_s: float | None = None,
+                        cleat_profile=None):
     """Drive a corner mass on the tire FMU over the cleat.
 
     Parameters
@@ -273,6 +275,9 @@ def run_quarter_tractor(fmu_path, *, mass_kg: float, speed_m_s: float, cleat_hei
         FMU parameters to override (e.g. ``{"stiffness": 5e5}``).
     step_s : float, optional
         Use exactly this step (the cleat's duration must be a multiple of it).
+    cleat_profile : CleatProfile, optional
+        The cleat's cross-section when not rectangular (a recording's ``cleat_profile``): the road
+        under a tire without a built-in cleat.
 
     Returns
     -------
@@ -282,13 +287,15 @@ def run_quarter_tractor(fmu_path, *, mass_kg: float, speed_m_s: float, cleat_hei
     """
     _check_run(max_step_s, duration_s, speed_m_s)
     cleat_time = cleat_width_m / speed_m_s
+    vertices = () if cleat_profile is None or cleat_profile.is_rectangular or step_s else \
+        [x / cleat_width_m for x in cleat_profile.vertices()]
     start, h, n = cleat_grid(t0_s=t0_s, duration_s=duration_s, arrival_s=arrival_s, cleat_time_s=cleat_time,
-                             max_step_s=step_s or max_step_s)
+                             max_step_s=step_s or max_step_s, vertex_fractions=vertices)
     with TireFmu(fmu_path, start_values=start_values) as tire:
         tire.initialize(start)
         params = tire.parameters()
         inputs = tire.inputs(n, start, h, arrival_s=arrival_s, speed_m_s=speed_m_s, cleat_height_m=cleat_height_m,
-                             cleat_width_m=cleat_width_m)
+                             cleat_width_m=cleat_width_m, profile=cleat_profile)
         offset = (0.0, 0.0)
         if params.get("lug_amplitude", 0.0):
             offset = lug_steady_state(masses_kg=[mass_kg], stiffness_n_m=[params["stiffness"]],

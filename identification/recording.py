@@ -15,7 +15,9 @@ A recording is two files with the same stem:
     ``{"format": "cleat-recording/1", "speed_kmh": float > 0,
     "cleat_height_mm": float > 0, "cleat_width_mm": float > 0,
     "wheelbase_m": float > 0, "wheel_load_kN": {"FL": float > 0, ...},
-    "description": str (optional), "acquisition": {...} (optional)}``.
+    "description": str (optional), "acquisition": {...} (optional),
+    "cleat_profile": "rectangular" | {"bevel_mm": b} | [[x_mm, z_mm], ...] (optional)}``.
+    ``cleat_profile`` is the cleat's cross-section (:mod:`identification.cleat`; absent: rectangular).
     ``wheel_load_kN`` holds the static wheel load of every channel (kN).
     ``acquisition`` describes the channels' analog chain:
     ``{"anti_alias_order": int 0..12, "anti_alias_cutoff_hz": float (below
@@ -69,7 +71,7 @@ REAR_TIRES = ("RL", "RR")
 STANDARD_GRAVITY = 9.80665
 
 _POSITIVE_KEYS = ("speed_kmh", "cleat_height_mm", "cleat_width_mm", "wheelbase_m")
-_KNOWN_KEYS = {"format", "description", "wheel_load_kN", "acquisition", *_POSITIVE_KEYS}
+_KNOWN_KEYS = {"format", "description", "wheel_load_kN", "acquisition", "cleat_profile", *_POSITIVE_KEYS}
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,6 +106,9 @@ class Recording:
     decimated_from_hz : float or None
         When the samples were decimated for the analysis (:func:`identification.window.decimate`): the
         file's sampling rate, Hz; None: the file's samples.
+    cleat_profile : CleatProfile or None
+        The cleat's cross-section when the sidecar gives one (:mod:`identification.cleat`); None: the
+        rectangular cleat of ``cleat_height_m`` x ``cleat_width_m``.
     conditioning : dict or None
         What :func:`identification.condition.condition` found and removed (offsets, engine lines, flipped
         signs, the speed from the front/rear delay); None: not conditioned.
@@ -122,6 +127,7 @@ class Recording:
     acquisition: Acquisition | None = None
     record_span_s: tuple[float, float] | None = None
     decimated_from_hz: float | None = None
+    cleat_profile: Any = None
     conditioning: dict | None = None
 
     def __post_init__(self):
@@ -179,6 +185,8 @@ class Recording:
             meta["description"] = self.description
         if self.acquisition is not None:
             meta["acquisition"] = self.acquisition.to_json()
+        if self.cleat_profile is not None:
+            meta["cleat_profile"] = self.cleat_profile.to_json()
         meta.update(self.extra)
         return meta
 
@@ -244,7 +252,18 @@ def read_recording(csv_path: str | Path) -> Recording:
         extra={k: v for k, v in meta.items() if k not in _KNOWN_KEYS},
         source=str(csv_path),
         acquisition=acquisition_from_sidecar(meta_path, meta["acquisition"]) if "acquisition" in meta else None,
+        cleat_profile=_profile(meta, meta_path),
     )
+
+
+def _profile(meta: dict, meta_path):
+    """The sidecar's ``cleat_profile``, or None for the default rectangular cleat."""
+    if meta.get("cleat_profile", "rectangular") == "rectangular":
+        return None
+    from .cleat import parse_profile
+
+    return parse_profile(meta["cleat_profile"], meta["cleat_height_mm"] / 1e3, meta["cleat_width_mm"] / 1e3,
+                         meta_path)
 
 
 def _is_number(value: Any) -> bool:

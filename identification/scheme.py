@@ -43,7 +43,8 @@ ForceFn = Callable[[float, float, float, float, float, float], float]
 
 
 def cleat_grid(*, t0_s: float, duration_s: float, arrival_s: float, cleat_time_s: float,
-               max_step_s: float, other_axle_delay_s: float | None = None) -> tuple[float, float, int]:
+               max_step_s: float, other_axle_delay_s: float | None = None,
+               vertex_fractions=()) -> tuple[float, float, int]:
     """Grid with the cleat's edges (arrival, arrival + w/v) on grid points.
 
     Parameters
@@ -52,6 +53,10 @@ def cleat_grid(*, t0_s: float, duration_s: float, arrival_s: float, cleat_time_s
         L / v: the step is then chosen (among cleat_time / N for N up to 1.5
         times the smallest) to put the other axle's edges as close to grid
         points as possible.
+    vertex_fractions : sequence of float
+        Where a cleat profile's vertices lie, as fractions of the cleat's
+        width: the step is then chosen (as above) to put them as close to
+        grid points as possible (a bevel's kinks on grid points).
 
     Returns
     -------
@@ -64,10 +69,12 @@ def cleat_grid(*, t0_s: float, duration_s: float, arrival_s: float, cleat_time_s
     """
     n_min = math.ceil(cleat_time_s / max_step_s - 1e-9)
     n_cells = n_min
+    fractions = list(vertex_fractions)
     if other_axle_delay_s is not None:
+        fractions.append(other_axle_delay_s / cleat_time_s)
+    if fractions:
         def off_grid(n_c):
-            x = other_axle_delay_s * n_c / cleat_time_s
-            return abs(x - round(x))
+            return max(abs(f * n_c - round(f * n_c)) for f in fractions)
         n_cells = min(range(n_min, int(1.5 * n_min) + 2), key=off_grid)
     h = cleat_time_s / n_cells
     start = arrival_s - math.ceil((arrival_s - t0_s) / h - 1e-9) * h
@@ -83,26 +90,45 @@ class TireInputs:
     road_vz: list
     hub_x: list
     hub_vx: list
+    edge: list | None = None      # True where a grid point holds a vertical edge (None: wherever the rate is not 0)
 
     @property
     def edges(self) -> list:
-        return [r != 0.0 for r in self.road_vz]
+        """Per grid point: whether it holds a vertical edge of the road (its rate then applied as an impulse)."""
+        return self.edge if self.edge is not None else [r != 0.0 for r in self.road_vz]
 
 
 def tire_inputs(n: int, start_s: float, step_s: float, *, arrival_s: float, speed_m_s: float,
                 cleat_height_m: float, cleat_width_m: float, external_cleat: bool = True,
-                x_offset_m: float = 0.0) -> TireInputs:
+                x_offset_m: float = 0.0, profile=None) -> TireInputs:
     """Road and longitudinal inputs of one tire on the grid start + i h.
 
     With `external_cleat` the rectangular cleat is passed as the road under
     the contact point (edges must be grid points: mean height and rate ±H/h
     there); otherwise the road input is flat and the tire, knowing the cleat,
     uses the longitudinal position x = v (t − t_arrival) + `x_offset_m` (the
-    position of its cleat's leading edge).
+    position of its cleat's leading edge).  An external cleat `profile`
+    (:class:`identification.cleat.CleatProfile`, not rectangular) is the road
+    itself: height z(v (t − t_arrival)) and rate v dz/dx on its slopes; its
+    vertical edges, if any, on the nearest grid points as above.
     """
     t = start_s + step_s * np.arange(n)
     road = np.zeros(n)
     rate = np.zeros(n)
+    if external_cleat and profile is not None and not profile.is_rectangular:
+        s = speed_m_s * (t - arrival_s)
+        road = profile.height(s)
+        # the rate: at a kink the mean of its two sides (the scheme's steps then see each side for half)
+        rate = 0.5 * speed_m_s * (profile.slope(s - 1e-9 * profile.width_m) + profile.slope(s + 1e-9 * profile.width_m))
+        edge = [False] * n
+        for x_e, dz in profile.steps():
+            i = int(round((arrival_s + x_e / speed_m_s - start_s) / step_s))
+            if 0 <= i < n:
+                road[i] = profile.height(s[i] - 0.5 * step_s * speed_m_s) + 0.5 * dz if i else road[i]
+                rate[i] = dz / step_s
+                edge[i] = True
+        x = speed_m_s * (t - arrival_s) + x_offset_m
+        return TireInputs(road.tolist(), rate.tolist(), x.tolist(), [float(speed_m_s)] * n, edge)
     if external_cleat and cleat_height_m:
         n1 = int(round((arrival_s - start_s) / step_s))
         n2 = int(round((arrival_s + cleat_width_m / speed_m_s - start_s) / step_s))
@@ -197,7 +223,7 @@ def run_corner(force: ForceFn, *, mass_kg: float, start_s: float, step_s: float,
     """
     g = STANDARD_GRAVITY
     h = step_s
-    rz, rv, hx, hv = inputs.road_z, inputs.road_vz, inputs.hub_x, inputs.hub_vx
+    rz, rv, hx, hv, ed = inputs.road_z, inputs.road_vz, inputs.hub_x, inputs.hub_vx, inputs.edges
     z_eq = _equilibrium_corner(lambda z: force(z, 0.0, hx[0], 0.0, 0.0, 0.0), mass_kg * g, unloaded_radius_m,
                                mass_kg * g / stiffness_guess_n_m)
     z = np.empty(n)
@@ -217,10 +243,10 @@ def run_corner(force: ForceFn, *, mass_kg: float, start_s: float, step_s: float,
         if before_step is not None:
             before_step(start_s + (i - 1) * h, h)
         jump = 0.0
-        if rv[i]:
+        if ed[i]:
             f_smooth = force(zn1, vp, hx[i], hv[i], rz[i], 0.0)
         fn1 = force(zn1, vp, hx[i], hv[i], rz[i], rv[i])
-        if rv[i]:
+        if ed[i]:
             jump = h * (fn1 - f_smooth) * inv_m
             impulses.append((start_s + i * h, jump))
         an1 = fn1 * inv_m - g

@@ -46,7 +46,7 @@ from .identify import identify_paper
 from .preprocess import DEFAULT_CUTOFF_HZ, TireSignal, filter_guard_s, lowpass, preprocess
 from .recording import FRONT_TIRES, Recording
 
-__all__ = ["DEFAULT_MAX_STEP_S", "MAX_ALIGNMENT_S", "Window", "Comparison", "simulate_recording", "box_average", "filtered_on_grid"]
+__all__ = ["DEFAULT_MAX_STEP_S", "MAX_ALIGNMENT_S", "Window", "Comparison", "simulate_recording", "box_average"]
 
 #: Default largest communication step of the co-simulation, s.
 DEFAULT_MAX_STEP_S = 2.5e-4
@@ -146,12 +146,33 @@ def box_average(cosim: CosimResult, time_s, interval_s: float, shift_s: float = 
     return cosim.mean_acceleration(np.asarray(time_s, dtype=float) - shift_s, interval_s)
 
 
-def filtered_on_grid(cosim: CosimResult, cutoff_hz: float, tire: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Hub acceleration averaged over each co-simulation step and low-passed on that grid: (t s, m/s²)."""
-    h = cosim.step_s
-    t = cosim.time_s
-    mean = cosim.mean_acceleration(t, h, tire)
-    return t, lowpass(mean, sample_rate_hz=1.0 / h, cutoff_hz=cutoff_hz)
+def _sensed(cosim: CosimResult, rec: Recording, cutoff_hz: float):
+    """``simulated(shift_s)``: what the recording's accelerometer shows of the co-simulated hub, delayed by
+    `shift_s` and low-passed as the measurement is.
+
+    Through the recording's acquisition chain (its anti-alias filter and AC coupling,
+    :func:`identification.acquisition.sensed_acceleration`, computed once on the co-simulation grid and
+    interpolated at the shifted sample times), or, without an anti-alias filter, the mean acceleration over
+    each sample interval; then the analysis low-pass at the recording's rate.
+    """
+    from .acquisition import sensed_acceleration
+
+    t, fs = rec.time_s, rec.sample_rate_hz
+    traj = cosim.trajectory
+    aa = rec.acquisition
+    if aa is not None and aa.anti_alias_order:
+        grid = traj.time_s
+        chained = sensed_acceleration(traj, 0, grid, fs, aa)
+
+        def at(shift):
+            return np.interp(t - shift, grid, chained)
+    else:
+        def at(shift):
+            return traj.mean_acceleration(0, t - shift, 1.0 / fs)
+
+    def simulated(shift):
+        return lowpass(at(shift), sample_rate_hz=fs, cutoff_hz=cutoff_hz)
+    return simulated
 
 
 def _window(t, meas, sim, start, end, noise) -> Window:
@@ -215,7 +236,8 @@ def simulate_recording(fmu_path, rec: Recording, tire: str, *, cutoff_hz: float 
         cosim = run_quarter_tractor(
             fmu_path, mass_kg=mass, speed_m_s=rec.speed_m_s, cleat_height_m=rec.cleat_height_m,
             cleat_width_m=rec.cleat_width_m, arrival_s=sig.impact_s, t0_s=t[0] - 2 * _MAX_SHIFT_S,
-            duration_s=t[-1] - t[0] + 4 * _MAX_SHIFT_S, max_step_s=max_step_s, start_values=start_values)
+            duration_s=t[-1] - t[0] + 4 * _MAX_SHIFT_S, max_step_s=max_step_s, start_values=start_values,
+            cleat_profile=rec.cleat_profile)
     except InputError:
         raise
     except Exception as exc:  # an FMU that fails (fmi2Fatal / fmi2Error) raises from fmpy
@@ -224,10 +246,7 @@ def simulate_recording(fmu_path, rec: Recording, tire: str, *, cutoff_hz: float 
     start, end = sig.impact_s - _LEAD_S, sig.window_end_s
     sel = (t >= start) & (t <= end)
 
-    fine_t, fine_a = filtered_on_grid(cosim, cutoff_hz)
-
-    def simulated(shift):
-        return np.interp(t - shift, fine_t, fine_a)
+    simulated = _sensed(cosim, rec, cutoff_hz)
 
     def sse(shift):
         return float(np.sum((simulated(shift)[sel] - measured[sel]) ** 2))

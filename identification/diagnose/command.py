@@ -165,6 +165,10 @@ def run(args) -> int:
     from ..window import decimate, focus, is_long, window_json
 
     long = is_long(rec)
+    if rec.cleat_profile is not None:
+        print(f"cleatfmu: warning: {rec.source}: the diagnosis' models ride over a rectangular cleat of the "
+              f"sidecar's height and width; the cleat_profile {json.dumps(rec.cleat_profile.to_json())} is "
+              f"used by simulate only", file=sys.stderr)
     rec = decimate(focus(rec, cutoff_hz=args.cutoff_hz), cutoff_hz=args.cutoff_hz)
     long = long or rec.decimated_from_hz is not None
     keep_fmus = args.fmu is not None or args.fmu_dir is not None

@@ -29,6 +29,9 @@ __all__ = ["RigRun", "run_rig", "write_run", "TRUTH_FORMAT"]
 TRUTH_FORMAT = "cleat-rig-truth/1"
 #: Pre-roll before t = 0 when a periodic excitation must reach steady state, s.
 _PRE_ROLL_S = 0.5
+#: The engine's vibration enters the sensor chain this long before the run starts, s (the anti-alias
+#: filter has then long settled; the AC coupling's slow start on a zero-mean vibration is negligible).
+_ENGINE_PRE_ROLL_S = 0.2
 
 
 @dataclass(eq=False)
@@ -91,8 +94,9 @@ def run_rig(effects=(), overrides: dict | None = None, *, seed: int = 0) -> RigR
             pitch = [np.pi * v[f"tire.{'front' if f else 'rear'}.diameter_m"]
                      / v[f"tire.{'front' if f else 'rear'}.lugs"] for f in front]
             lug_freq = speed / np.array(pitch)
+    profile = _profile(v)
     road = RoadInput(arrival, speed, v["cleat.height_m"], v["cleat.width_m"], footprint,
-                     lug_amp, lug_freq, lug_phase)
+                     lug_amp, lug_freq, lug_phase, profile=profile)
     plant = build_plant(v, effects, road)
 
     fs = v["sensor.rate_hz"]
@@ -113,9 +117,12 @@ def run_rig(effects=(), overrides: dict | None = None, *, seed: int = 0) -> RigR
     poles, res, direct = chain_modes(int(v["sensor.aa_order"]), aa_cut, v["sensor.highpass_hz"])
     measured = apply_chain(acc, t_start, h, cuts, poles, res, direct)
     a_rng = artifact_rng(seed)
-    engine, engine_info = engine_vibration(t_start + h * np.arange(n_nodes), v, a_rng)
-    if engine_info:  # the chain is linear: the engine's smooth vibration passes it on its own
-        measured += apply_chain(engine, t_start, h, [], poles, res, direct)
+    # the engine runs before the recording: its vibration passes the chain (linear: on its own) from
+    # _ENGINE_PRE_ROLL_S earlier, so that the chain has settled on it when the recording starts
+    n_eng = int(round(_ENGINE_PRE_ROLL_S / h))
+    engine, engine_info = engine_vibration(t_start + h * np.arange(-n_eng, n_nodes), v, a_rng)
+    if engine_info:
+        measured += apply_chain(engine, t_start - n_eng * h, h, [], poles, res, direct)[:, n_eng:]
     pick = slice(n_pre, None, over)
     y = measured[:, pick]
     time = np.arange(n_samples) / fs
@@ -130,11 +137,26 @@ def run_rig(effects=(), overrides: dict | None = None, *, seed: int = 0) -> RigR
         wheel_load_N={c: v[f"tire.{c}.load_N"] for c in channels},
         description="virtual cleat-test rig recording", source="<rig>",
         acquisition=Acquisition(int(v["sensor.aa_order"]), float(aa_cut) if v["sensor.aa_order"] else 0.0,
-                                float(v["sensor.highpass_hz"])))
+                                float(v["sensor.highpass_hz"])),
+        cleat_profile=None if profile is None or profile.is_rectangular else profile)
     truth = _truth(v, effects, seed, plant, road, traj, t_end)
     truth["artifacts"] = dict(active(v), **engine_info, **sensor_info)
     truth["speed_m_s"] = speed
     return RigRun(recording=rec, truth=truth, accel_true_m_s2=acc[:, pick])
+
+
+def _profile(v: dict):
+    """The cleat's profile from ``cleat.profile_mm`` or ``cleat.bevel_m`` (None: rectangular)."""
+    from ..cleat import CleatProfile, parse_profile
+
+    if v["cleat.profile_mm"]:
+        pts = [[float(c) for c in item.split(":")] for item in v["cleat.profile_mm"].split(",")]
+        return parse_profile(pts, v["cleat.height_m"], v["cleat.width_m"], "--param cleat.profile_mm")
+    if v["cleat.bevel_m"] > 0:
+        if v["cleat.bevel_m"] > v["cleat.width_m"] / 2:
+            raise InputError("--param", "cleat.bevel_m must be at most half of cleat.width_m")
+        return CleatProfile.bevelled(v["cleat.height_m"], v["cleat.width_m"], v["cleat.bevel_m"])
+    return None
 
 
 def _truth(v, effects, seed, plant, road, traj, t_end) -> dict:

@@ -29,7 +29,7 @@ class Param:
     default: Any
     unit: str
     description: str
-    check: str = "positive"  # positive | nonnegative | int>=0 | int>=1 | flag (0 or 1) | channels | channels? | any
+    check: str = "positive"  # positive | nonnegative | int>=0 | int>=1 | flag | channels | channels? | profile | any
 
 
 def _table() -> dict[str, Param]:
@@ -39,6 +39,11 @@ def _table() -> dict[str, Param]:
         "t0_s": Param(0.5, "s", "time the front axle's contact point reaches the cleat's leading edge"),
         "cleat.height_m": Param(0.040, "m", "cleat height"),
         "cleat.width_m": Param(0.100, "m", "cleat width in the driving direction"),
+        "cleat.bevel_m": Param(0.0, "m", "bevel of the cleat's edges: the height rises over this length "
+                                         "(a trapezoid; 0: rectangular, vertical edges)", "nonnegative"),
+        "cleat.profile_mm": Param("", "mm", "the cleat's cross-section as x:z points from the leading edge, "
+                                            "e.g. 0:0,10:40,90:40,100:0 (overrides the bevel; empty: none)",
+                                  "profile"),
         "cleat.stagger_m": Param(0.0, "m", "right-hand cleat placed this far beyond the left one "
                                            "(negative: the left one beyond the right)", "any"),
         "vehicle.wheelbase_m": Param(2.77, "m", "wheelbase"),
@@ -105,6 +110,15 @@ PARAMS: dict[str, Param] = _table()
 
 def _coerce(key: str, value: Any) -> Any:
     spec = PARAMS[key]
+    if spec.check == "profile":
+        text = str(value).strip()
+        try:
+            pts = [[float(v) for v in item.split(":")] for item in text.split(",")] if text else []
+        except ValueError:
+            pts = None
+        if pts is None or any(len(p) != 2 for p in pts):
+            raise InputError("--param", f"{key} must be x:z points in mm separated by commas, got {value!r}")
+        return ",".join(f"{x:g}:{z:g}" for x, z in pts)
     if spec.check in ("channels", "channels?"):
         names = [s.strip().upper() for s in str(value).split(",") if s.strip()]
         if spec.check == "channels?" and not names:
@@ -142,6 +156,7 @@ RANGES: dict[str, tuple[float, float, str]] = {
     "t0_s": (0.0, 600.0, "the front axle's arrival at the cleat"),
     "cleat.height_m": (0.002, 0.2, "a cleat's height"),
     "cleat.width_m": (0.005, 1.0, "a cleat's width in the driving direction"),
+    "cleat.bevel_m": (0.0, 0.5, "a cleat's bevel"),
     "cleat.stagger_m": (-5.0, 5.0, "the right cleat beyond the left one"),
     "vehicle.wheelbase_m": (0.5, 10.0, "a tractor's wheelbase"),
     "vehicle.track_m": (0.5, 5.0, "a tractor's track width"),

@@ -13,6 +13,11 @@ steps (the damper then delivers an impulse c·ΔH, handled by the solver).
 With ℓ > 0 the tire feels the cleat for (ℓ + w) / v, and never a step.
 
 Lug passing adds A sin(2π f t + φ) per tire (periodic_disturbance).
+
+A cleat `profile` other than the rectangle (:class:`identification.cleat.CleatProfile`, bevelled or
+piecewise linear) replaces the pulse: under a point contact the road is the profile itself (steps
+only at its vertical edges, a finite rate v dz/dx on its slopes), under a footprint its parabolic
+average (:meth:`~identification.cleat.CleatProfile.averaged`).
 """
 
 from __future__ import annotations
@@ -36,10 +41,12 @@ class RoadInput:
     lug_amplitude_m : float
         Lug-passing amplitude, m (0: none).
     lug_frequency_hz, lug_phase_rad : array_like, shape (4,)
+    profile : CleatProfile, optional
+        The cleat's cross-section when not the rectangle of `height_m` x `width_m`.
     """
 
     def __init__(self, arrival_s, speed_m_s, height_m, width_m, footprint_m,
-                 lug_amplitude_m=0.0, lug_frequency_hz=(0, 0, 0, 0), lug_phase_rad=(0, 0, 0, 0)):
+                 lug_amplitude_m=0.0, lug_frequency_hz=(0, 0, 0, 0), lug_phase_rad=(0, 0, 0, 0), profile=None):
         self.arrival = np.asarray(arrival_s, dtype=float)
         self.v, self.h, self.w = float(speed_m_s), float(height_m), float(width_m)
         self.fp = np.asarray(footprint_m, dtype=float)
@@ -48,6 +55,7 @@ class RoadInput:
         self.lug_a = float(lug_amplitude_m)
         self.lug_w = 2 * np.pi * np.asarray(lug_frequency_hz, dtype=float)
         self.lug_phi = np.asarray(lug_phase_rad, dtype=float)
+        self.profile = None if profile is None or profile.is_rectangular else profile
 
     def __call__(self, t, t_mid=None):
         """Road height (m) and rate (m/s), arrays of shape (4, len(t)); steps excluded from the rate.
@@ -61,6 +69,18 @@ class RoadInput:
         r = np.zeros_like(s)
         rd = np.zeros_like(s)
         env, pc = self._env, self._pc
+        if self.profile is not None:
+            for i in env:
+                r[i], rd[i] = self.profile.averaged(s[i], self.fp[i])
+                rd[i] *= self.v
+            for i in pc:
+                s_pc = s[i]
+                if t_mid is not None:   # at a vertical edge ending the interval: the value inside it
+                    toward = np.sign(np.broadcast_to(t_mid, t.shape) - t)
+                    s_pc = s_pc + toward * 1e-9 * self.profile.width_m
+                r[i] = self.profile.height(s_pc)
+                rd[i] = self.v * self.profile.slope(s_pc)
+            env = pc = np.array([], dtype=int)
         if env.size:
             # Parabolic pressure over the footprint: P(z) = 1/2 + 3/4 (u - u³/3), u = clip(2z/ℓ, -1, 1),
             # density 3/(2ℓ) (1 - u²); both evaluated at z = w - s and z = -s.
@@ -85,7 +105,10 @@ class RoadInput:
         out = []
         for i, length in enumerate(self.fp):
             if length <= 0:
-                out += [(self.arrival[i], i, self.h), (self.arrival[i] + self.w / self.v, i, -self.h)]
+                if self.profile is not None:
+                    out += [(self.arrival[i] + x / self.v, i, dz) for x, dz in self.profile.steps()]
+                else:
+                    out += [(self.arrival[i], i, self.h), (self.arrival[i] + self.w / self.v, i, -self.h)]
         return out
 
     def excitation_interval(self, i: int) -> tuple[float, float]:
@@ -96,8 +119,10 @@ class RoadInput:
     def breakpoints(self):
         """Times where the road input or its derivatives are not smooth, s (sorted)."""
         pts = set()
+        xs = self.profile.vertices() if self.profile is not None else [0.0, self.w]
         for i, length in enumerate(self.fp):
-            a, b = self.arrival[i], self.arrival[i] + self.w / self.v
             half = length / 2 / self.v
-            pts.update((a - half, a + half, b - half, b + half) if length > 0 else (a, b))
+            for x in xs:
+                at = self.arrival[i] + x / self.v
+                pts.update((at - half, at + half) if length > 0 else (at,))
         return sorted(pts)
