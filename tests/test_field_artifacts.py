@@ -139,3 +139,22 @@ def test_diagnosis_of_a_recording_with_every_artifact(tmp_path, cli):
     for tire, t in doc["tires"].items():
         assert t["k"] == pytest.approx(run.truth["tires"][tire]["k"], rel=0.03), tire
         assert t["c"] == pytest.approx(run.truth["tires"][tire]["c"], rel=0.10), tire
+
+
+@pytest.mark.parametrize("effects, overrides, named", [
+    (("nonlinear_stiffness",), {"cleat.height_m": 0.010, "nonlinear_stiffness.exponent": 1.4}, ["nonlinear_stiffness"]),
+    (("periodic_disturbance",), {"periodic_disturbance.amplitude_m": 0.002, "periodic_disturbance.frequency_hz": 12.0},
+     ["periodic_disturbance"]),
+])
+def test_a_progressive_tire_on_a_low_cleat_and_periodic_road_excitation_are_named_as_such(effects, overrides, named):
+    """A progressive tire (n = 1.4) on a 10 mm cleat is named; a steady 12 Hz road excitation of 2 mm is named
+    periodic_disturbance and nothing else (never enveloping); k and c as the issue demands."""
+    from identification.diagnose.joint_select import diagnose_tractor
+
+    run = _run(effects, seed=6, **overrides)
+    diag = diagnose_tractor(run.recording)
+    assert diag.effects == named, diag.effects
+    doc = diag.to_json()
+    for tire, t in doc["tires"].items():
+        assert t["k"] == pytest.approx(run.truth["tires"][tire]["k"], rel=0.03), tire
+        assert t["c"] == pytest.approx(run.truth["tires"][tire]["c"], rel=0.10), tire
