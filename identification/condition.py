@@ -5,12 +5,15 @@ calls it), in this order:
 
 1. **Engine harmonics.**  A steady spectral line in :data:`ENGINE_BAND_HZ` (below 0.45 fs; the tires
    and the lugs ring below it at test speeds) that stands :data:`LINE_PROMINENCE` x above its spectral
-   neighbourhood on every channel is engine vibration: its orders (2, 3, ... x; :data:`ORDER_PROMINENCE`
-   x above their neighbourhood) are searched, its frequency refined on all orders and channels together,
-   and each order's least-squares sinusoid (amplitude and phase per channel, fitted away from the
-   impacts beside a constant and a drift, on the channels high-passed at half the band's lower end with
-   zero phase, its gain divided out) is subtracted.  It goes first: its vibration hides the
-   quiet stretches the next steps look for.
+   neighbourhood on every channel, with at least one of its orders (2, 3, ... x;
+   :data:`ORDER_PROMINENCE` x above their neighbourhood), is engine vibration (a single line may as
+   well be a road or lug excitation, which the diagnosis names ``periodic_disturbance``).  Its
+   frequency is refined on all orders and channels together, and each order's least-squares sinusoid
+   (amplitude and phase per channel, fitted away from the impacts beside a constant and a drift, on
+   the channels high-passed at half the band's lower end with zero phase, its gain divided out) is
+   subtracted.  The spectra that find the lines are averaged over windows away from the impacts,
+   whose impulses are broadband.  This step goes first: the vibration hides the quiet stretches the
+   next steps look for.
 2. **Offset and drift.**  Before the first impact and at the end of the record the hub's acceleration
    is noise (and any steady vibration) about zero: the line through the means of these quiet ends is
    the amplifier's DC offset and linear drift.  It is removed where it is significant (5 standard
@@ -56,7 +59,9 @@ ENGINE_BAND_HZ = (20.0, 200.0)
 LINE_PROMINENCE = 12.0
 #: An order of an engine line found must stand this many times above its neighbourhood.
 ORDER_PROMINENCE = 4.0
-#: Half-width of the neighbourhood of a line, Hz.
+#: Length of the windows of the line search's spectra, s (their main lobe: ±2 / this).
+_SEGMENT_S = 0.5
+#: Width of the neighbourhood of a line, Hz.
 _NEIGHBOURHOOD_HZ = 4.0
 #: Most engine orders searched.
 MAX_ORDERS = 6
@@ -123,12 +128,21 @@ def _offset_drift(t: np.ndarray, x: np.ndarray, before: np.ndarray, tail: np.nda
     return start, slope, max(abs(start), abs(end)), threshold
 
 
-def _amplitude_spectrum(x: np.ndarray, fs: float, pad: int = 4) -> tuple[np.ndarray, np.ndarray]:
-    n = x.size
-    nfft = 1 << int(np.ceil(np.log2(pad * n)))
+def _quiet_spectra(x: np.ndarray, keep: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray, int]:
+    """Mean amplitude spectra (channels, bins) over Hann windows of :data:`_SEGMENT_S` (half overlapping)
+    laid in the runs of `keep` (away from the impacts, whose impulses are broadband), the whole record
+    when no run is long enough: (frequencies Hz, spectra, window length in samples)."""
+    n = max(8, int(_SEGMENT_S * fs))
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(np.int8), [0]])))
+    starts = [a + j for a, b in zip(edges[::2], edges[1::2]) for j in range(0, b - a - n + 1, n // 2)]
+    if not starts:
+        starts, n = [0], x.shape[1]
+    nfft = 1 << int(np.ceil(np.log2(4 * n)))
     w = np.hanning(n)
-    spec = np.abs(np.fft.rfft((x - x.mean()) * w, nfft)) * 2 / w.sum()
-    return np.fft.rfftfreq(nfft, 1 / fs), spec
+    segs = np.stack([x[:, a:a + n] for a in starts])                      # (segments, channels, n)
+    segs = (segs - segs.mean(axis=2, keepdims=True)) * w
+    spec = np.abs(np.fft.rfft(segs, nfft, axis=2)).mean(axis=0) * 2 / w.sum()
+    return np.fft.rfftfreq(nfft, 1 / fs), spec, n
 
 
 def _line_fit(t: np.ndarray, channels: np.ndarray, f: float, orders=(1,)) -> tuple[np.ndarray, float]:
@@ -150,16 +164,27 @@ def _refine(t: np.ndarray, channels: np.ndarray, f0: float, width: float, orders
     channels."""
     from scipy.optimize import minimize_scalar
 
-    res = minimize_scalar(lambda f: -_line_fit(t, channels, f, orders)[1], bounds=(f0 - width, f0 + width),
-                          method="bounded", options={"xatol": 1e-7})
+    def power(f):
+        return _line_fit(t, channels, f, orders)[1]
+
+    # a grid finer than the record's resolution (1 / its span) finds the main lobe, Brent's method its top
+    step = 0.2 / (t[-1] - t[0])
+    grid = np.arange(f0 - width, f0 + width + step, step)
+    best = float(grid[int(np.argmax([power(f) for f in grid]))])
+    res = minimize_scalar(lambda f: -power(f), bounds=(best - step, best + step), method="bounded",
+                          options={"xatol": 1e-7})
     return float(res.x)
 
 
-def _prominent(freq, specs, f, half_bin, prominence=None) -> tuple[bool, float]:
-    """Whether a line near `f` stands `prominence` (:data:`LINE_PROMINENCE`) x above its neighbourhood on
-    every channel."""
-    near = (freq >= f - _NEIGHBOURHOOD_HZ) & (freq <= f + _NEIGHBOURHOOD_HZ)
-    at = (freq >= f - 2 * half_bin) & (freq <= f + 2 * half_bin)
+def _prominent(freq, specs, f, lobe_hz, prominence=None) -> tuple[bool, float]:
+    """Whether a line near `f` (within its main lobe, ±`lobe_hz`) stands `prominence`
+    (:data:`LINE_PROMINENCE`) x above the median of its neighbourhood (±:data:`_NEIGHBOURHOOD_HZ` beyond the
+    lobe) on every channel."""
+    d = np.abs(freq - f)
+    near = (d > lobe_hz) & (d <= lobe_hz + _NEIGHBOURHOOD_HZ)
+    at = d <= 0.5 * lobe_hz
+    if not near.any() or not at.any():
+        return False, 0.0
     ratios = [float(s[at].max() / max(np.median(s[near]), 1e-300)) for s in specs]
     return min(ratios) >= (prominence or LINE_PROMINENCE), min(ratios)
 
@@ -167,23 +192,21 @@ def _prominent(freq, specs, f, half_bin, prominence=None) -> tuple[bool, float]:
 def _engine_lines(t, channels, fs, cutoff_hz, keep) -> list[dict]:
     """The engine's lines found on every channel: [{"frequency_hz", "order", "amplitude_m_s2": [...]}].
 
-    Lines are detected on the whole record and fitted on the samples `keep` (away from the impacts,
-    whose broadband content would otherwise leak into every line's fit).
+    Lines are detected on spectra of the samples `keep` (away from the impacts, whose broadband
+    content would otherwise hide a weak line and leak into every line's fit) and fitted there.
     """
     hi = min(ENGINE_BAND_HZ[1], 0.45 * fs)
     lo = ENGINE_BAND_HZ[0]
     if hi <= lo + 2 * _NEIGHBOURHOOD_HZ or t[-1] - t[0] < 0.5:
         return []
-    spectra = [_amplitude_spectrum(x, fs) for x in channels]
-    freq = spectra[0][0]
-    specs = [s for _, s in spectra]
-    half_bin = fs / t.size / 2
+    freq, specs, n_window = _quiet_spectra(channels, keep, fs)
+    lobe = 2.0 * fs / n_window          # the Hann window's main lobe, Hz
     band = (freq >= lo) & (freq <= hi)
     # the fundamental: the strongest line of the channels' product spectrum (a line common to all of them)
     common = np.exp(np.mean([np.log(np.maximum(s, 1e-300)) for s in specs], axis=0))
     lines: list[dict] = []
     f1 = float(freq[band][np.argmax(common[band])])
-    ok, _ = _prominent(freq, specs, f1, half_bin)
+    ok, _ = _prominent(freq, specs, f1, lobe)
     if not ok:
         return []
     # fit on the channels high-passed below the band (zero-phase, so a line keeps its phase and loses only
@@ -196,18 +219,21 @@ def _engine_lines(t, channels, fs, cutoff_hz, keep) -> list[dict]:
     def gain(f):
         return float(np.abs(signal.sosfreqz(sos, worN=[f], fs=fs)[1][0]) ** 2)
 
-    f1 = _refine(t, channels, f1, 2 * half_bin)
+    f1 = _refine(t, channels, f1, lobe)
     # a lower line whose orders this one is (a 2nd or 3rd order stronger than the first)
     for div in (3, 2):
         fd = f1 / div
-        if fd >= lo and _prominent(freq, specs, fd, half_bin)[0]:
-            f1 = _refine(t, channels, fd, 2 * half_bin / div)
+        if fd >= lo and _prominent(freq, specs, fd, lobe)[0]:
+            f1 = _refine(t, channels, fd, lobe / div)
             break
-    orders = [m for m in range(1, MAX_ORDERS + 1) if m * f1 <= hi
-              and (m == 1 or _prominent(freq, specs, m * f1, half_bin, ORDER_PROMINENCE)[0])]
+    orders = [m for m in range(1, MAX_ORDERS + 1) if m * f1 <= 0.45 * fs - lobe - _NEIGHBOURHOOD_HZ
+              and (m == 1 or _prominent(freq, specs, m * f1, lobe, ORDER_PROMINENCE)[0])]
+    if len(orders) < 2:
+        return []     # one steady line alone: a road or lug excitation as likely as an engine (the diagnosis
+    #                   names it periodic_disturbance); an engine shows its orders
     # the fundamental refined on all its orders together (the higher ones carry its phase faster), then
     # every order's sinusoid fitted jointly
-    f1 = _refine(t, channels, f1, 2 * half_bin / max(orders), orders)
+    f1 = _refine(t, channels, f1, 0.25 / (t[-1] - t[0]) + lobe / 50, orders)
     coefs, _ = _line_fit(t, channels, f1, orders)
     for m, coef in zip(orders, coefs):
         coef = coef / gain(m * f1)
@@ -286,8 +312,8 @@ def condition(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce:
     Returns
     -------
     Recording
-        A new recording whose ``conditioning`` says what was done (`rec` itself, marked, when nothing
-        was); a recording already conditioned is returned unchanged.
+        A new recording whose ``conditioning`` says what was done (holding `rec`'s own arrays when
+        nothing was changed); a recording already conditioned is returned unchanged.
     """
     if rec.conditioning is not None:
         return rec
