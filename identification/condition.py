@@ -21,9 +21,12 @@ calls it), in this order:
 3. **A flipped sensor.**  A cleat pushes the hub up: the first excursion of a channel's own impact
    (its first burst; a rear channel's after the front axle's impact, which the body carries to it)
    is positive.  A channel whose first excursion is negative was recorded with the sign reversed; it
-   is corrected and named in a warning.  Where an axle's two channels start at
-   the same time (within :data:`_COINCIDENT_S`) with opposite signs, a pivoting axle may have carried
-   one wheel's impact to the other: that is warned of and left uncorrected.
+   is corrected and named in a warning.  Where an axle's two channels rise at the same time (within
+   :data:`_COINCIDENT_S`) with opposite signs, the sizes of the two first excursions decide: one less
+   than :data:`_CARRIED_RATIO` of the other was carried across by the body (whose roll gives the far
+   hub about a quarter of the impact, opposite in sign) and says nothing of its sensor; two comparable
+   ones are two own impacts, so the negative one is flipped, except on the front axle, where a
+   pivoting axle also carries the whole impact across: that is warned of and left uncorrected.
 4. **The speed from the front/rear delay.**  Where a front and a rear channel of one side are present,
    the delay between their impact onsets gives the speed (wheelbase / delay).  It is reported beside
    the sidecar's, with a warning when the two differ by more than :data:`SPEED_TOLERANCE` (and the two
@@ -73,7 +76,7 @@ SIDES_AGREE = 0.01
 #: A burst rises where |x| first reaches this fraction of the channel's largest value.
 _RISE_FRACTION = 0.3
 #: A channel's own impact: its first excursion is where |x| first reaches this fraction of the burst maximum.
-_FIRST_FRACTION = 0.2
+_FIRST_FRACTION = 0.3
 #: The onset: where |x| was last below this fraction of the burst maximum (or 3 noise RMS).
 _ONSET_FRACTION = 0.05
 #: A quiet stretch before the onset lasts this long, s.
@@ -84,8 +87,12 @@ _STEADY_FACTOR = 1.5
 _MIN_SNR = 10.0
 #: A rear channel's own impact is searched from this fraction of the sidecar's delay after the front's onset.
 _REAR_SEARCH = 0.85
-#: Impacts of an axle's two channels closer than this are one event for the flip test, s.
-_COINCIDENT_S = 0.01
+#: Impacts of an axle's two channels rising closer than this are one event for the flip test, s.
+_COINCIDENT_S = 0.005
+#: Span of a first excursion, s.
+_EXCURSION_S = 0.03
+#: A first excursion smaller than this fraction of the other side's, in one event, was carried across.
+_CARRIED_RATIO = 0.5
 #: Longest rise from the onset to the burst maximum, s (a long footprint at a low speed).
 _MAX_RISE_S = 0.4
 
@@ -368,17 +375,26 @@ def condition(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce:
     filt = low(x)
     onsets, flipped = {}, []
     impacts = _own_impacts(rec, filt, sigma)
-    ambiguous = []
+    ambiguous, carried = [], []
+    span = int(_EXCURSION_S * fs)
     for left, right in (("FL", "FR"), ("RL", "RR")):
         if left in impacts and right in impacts:
-            (o1, s1, _), (o2, s2, _) = impacts[left], impacts[right]
-            if s1 * s2 < 0 and abs(t[o1] - t[o2]) < _COINCIDENT_S:
-                ambiguous += [left, right]
+            (_, s1, r1), (_, s2, r2) = impacts[left], impacts[right]
+            if s1 * s2 < 0 and abs(t[r1] - t[r2]) < _COINCIDENT_S:
+                # one event on both sides: each first excursion's size tells an own impact (comparable on
+                # the two sides) from one the body carried across (a quarter of it, opposite in sign)
+                m = {c: float(np.max(impacts[c][1] * filt[names.index(c)][impacts[c][0]:impacts[c][0] + span]))
+                     for c in (left, right)}
+                small, large = sorted((left, right), key=m.get)
+                if m[small] < _CARRIED_RATIO * m[large]:
+                    carried.append(small)           # its sign says nothing; the larger one's does
+                elif left[0] == "F":
+                    ambiguous += [left, right]      # a pivoting front axle carries the whole impact across
     for i, c in enumerate(names):
         onset, sign, _ = impacts[c]
         if sign != 0:
             onsets[c] = float(t[onset])
-        if sign < 0 and c not in ambiguous:
+        if sign < 0 and c not in ambiguous and c not in carried:
             flipped.append(c)
             x[i] = -x[i]
     if ambiguous:

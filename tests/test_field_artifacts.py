@@ -158,3 +158,19 @@ def test_a_progressive_tire_on_a_low_cleat_and_periodic_road_excitation_are_name
     for tire, t in doc["tires"].items():
         assert t["k"] == pytest.approx(run.truth["tires"][tire]["k"], rel=0.03), tire
         assert t["c"] == pytest.approx(run.truth["tires"][tire]["c"], rel=0.10), tire
+
+
+def test_a_flip_under_a_coupling_body_and_a_pivoting_axle_are_told_apart():
+    """A rigid body carries a quarter of one wheel's impact to the other side, opposite in sign: FR read
+    upside down 15 ms after FL is still found.  A pivoting front axle carries the whole impact across, as a
+    flipped sensor would look: both front channels are named as ambiguous and left as recorded."""
+    run = _run(("axle_coupling",), seed=0, **{"sensor.flipped": "FR"})
+    doc = condition(run.recording, announce=False).conditioning
+    assert doc["flipped"] == ["FR"] and "flip_ambiguous" not in doc
+    for tire in ("RL", "RR"):   # the rear axle: both own impacts, 15 ms apart, both positive
+        assert tire not in doc["flipped"]
+    pivot = run_rig(("axle_coupling",), {"axle_coupling.front_axle_pivot": 1, "cleat.stagger_m": -0.25,
+                                         "speed_kmh": 8.0}, seed=4)
+    doc = condition(pivot.recording, announce=False).conditioning
+    assert doc.get("flipped") is None and doc["flip_ambiguous"] == ["FL", "FR"]
+    assert any("pivoting axle" in w for w in doc["warnings"])
