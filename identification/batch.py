@@ -145,11 +145,10 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
     from .recording import read_recording
     from .validation import simulate_recording
     from .waveform import identify_waveform
+    from .window import focus, window_json
 
     rep = TireReport(recording=stem, tire=tire)
     fmu_dir = Path(out_dir) / "fmu"
-    from .window import focus, window_json
-
     rec = read_recording(csv_path)
     sig = None
     with _timed(rep.timings, "identify"):

@@ -49,7 +49,7 @@ import numpy as np
 from .preprocess import DEFAULT_CUTOFF_HZ, lowpass, noise_rms
 from .recording import FRONT_TIRES, Recording
 
-__all__ = ["condition", "conditioning_json", "conditioning_warnings", "ENGINE_BAND_HZ", "LINE_PROMINENCE",
+__all__ = ["condition", "conditioning_json", "ENGINE_BAND_HZ", "LINE_PROMINENCE",
            "SPEED_TOLERANCE"]
 
 #: Span around a channel's impact and its largest burst left out of the engine lines' fits, s (before, after).
@@ -444,7 +444,3 @@ def conditioning_json(rec: Recording) -> dict | None:
         out["speed"] = doc["speed"]
     return out or None
 
-
-def conditioning_warnings(rec: Recording) -> list[str]:
-    """The conditioning's warnings (empty when none or not conditioned)."""
-    return list((rec.conditioning or {}).get("warnings", []))

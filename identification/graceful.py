@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .errors import InputError
-from .identify import PaperResult, identify_paper
+from .identify import identify_paper
 from .preprocess import DEFAULT_CUTOFF_HZ, preprocess
 from .recording import Recording
 
@@ -154,7 +154,3 @@ def identify_channels(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_
         out[tire] = Refusal(tire, rule, fallback, problem)
     return out
 
-
-def results_only(results: dict) -> dict:
-    """The channels identified by the requested method (no refusals)."""
-    return {k: v for k, v in results.items() if isinstance(v, PaperResult)}
