@@ -56,7 +56,7 @@ def equilibrium_starts(kind: FmuKind, starts: dict, given: dict, static_load_n: 
                 out["hub_x"] = reach - 1.0
         cleat, _ = footprint_cleat(out["hub_x"], starts["footprint_length"], starts["cleat_x"],
                                    starts["cleat_height"], starts["cleat_width"],
-                                   starts.get("parabolic_pressure", False))
+                                   starts.get("parabolic_pressure", False), starts.get("cleat_bevel", 0.0))
         lug, _ = lug_road(out["hub_x"], starts["lug_amplitude"], starts["lug_pitch"], starts["lug_phase"])
         road = road + cleat + lug
     if "hub_z" not in given:

@@ -96,6 +96,51 @@ def _extended_tire_cleat_run(t: np.ndarray, starts: dict) -> dict:
             "hub_x": x0 + speed * t, "hub_vx": np.full_like(t, speed)}
 
 
+def _trapezoid(s, xc: float, height: float, width: float, bevel: float):
+    """The bevelled cleat (b > 0) at positions `s`: height H clip(min(t, w − t) / b, 0, 1), t = s − x_c, and
+    its slope (the derivative from the right: ±H/b on the bevels, 0 elsewhere)."""
+    t = s - xc
+    z = height * np.clip(np.minimum(t, width - t) / bevel, 0.0, 1.0)
+    rising = ((t >= 0.0) & (t < bevel)).astype(float)
+    falling = ((t >= width - bevel) & (t < width)).astype(float)
+    return z, height / bevel * (rising - falling)
+
+
+def _trapezoid_integral(s, xc: float, height: float, width: float, bevel: float):
+    """∫ of the bevelled cleat (b > 0) from −∞ to `s`: with t = clip(s − x_c, 0, w), the leading bevel
+    covered over r = min(t, b), the top over f = clip(t − b, 0, w − 2b), the trailing bevel over
+    e = max(t − (w − b), 0): H (r² / (2b) + f + e − e² / (2b)); H (w − b) past the cleat."""
+    t = np.clip(s - xc, 0.0, width)
+    rise = np.minimum(t, bevel)
+    top = np.clip(t - bevel, 0.0, width - 2.0 * bevel)
+    fall = np.maximum(t - (width - bevel), 0.0)
+    return height * (rise * rise / (2.0 * bevel) + top + fall - fall * fall / (2.0 * bevel))
+
+
+#: Gauss–Legendre nodes and weights on [−1, 1], exact for polynomials up to degree 5.
+_GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(3)
+
+
+def _bevelled_parabolic(x, length: float, xc: float, height: float, width: float, bevel: float):
+    """The bevelled cleat averaged over the footprint under the parabolic pressure density
+    q(s) = 3 / (2ℓ) (1 − (2 (s − x) / ℓ)²), and its slope along x, by quadrature.
+
+    On each piece of the footprint between the cleat's kinks the integrands z q and z' q are
+    polynomials of degree ≤ 3, so a 3-point Gauss–Legendre rule per piece is exact (to round-off).
+    The slope is ∫ z'(s) q(s) ds: d/dx ∫ z(x + ξ) q(ξ) dξ for the continuous trapezoid z.
+    """
+    lo, hi = x - 0.5 * length, x + 0.5 * length
+    cuts = np.sort(np.column_stack([lo, hi, *(np.clip(xc + k, lo, hi) for k in (0.0, bevel, width - bevel,
+                                                                               width))]), axis=1)
+    centre, radius = 0.5 * (cuts[:, 1:] + cuts[:, :-1]), 0.5 * (cuts[:, 1:] - cuts[:, :-1])
+    s = centre[..., None] + radius[..., None] * _GAUSS_NODES
+    u = 2.0 * (s - x[:, None, None]) / length
+    q = 1.5 / length * (1.0 - u * u)
+    z, dz = _trapezoid(s, xc, height, width, bevel)
+    weight = radius[..., None] * _GAUSS_WEIGHTS
+    return (weight * z * q).sum(axis=(1, 2)), (weight * dz * q).sum(axis=(1, 2))
+
+
 def _extended_tire_closed_form(inputs: dict, starts: dict) -> dict:
     """The extended tire, vectorised; the enveloped cleat as a difference of an antiderivative.
 
@@ -110,11 +155,28 @@ def _extended_tire_closed_form(inputs: dict, starts: dict) -> dict:
     s = clip(2ξ/ℓ, −1, 1); the cleat occupies ξ in [x_c − x, x_c + w − x], so
     the average is H (Q(x_c + w − x) − Q(x_c − x)) and its slope along x is
     H (q(x_c − x) − q(x_c + w − x)).
+
+    A bevelled cleat (``cleat_bevel`` b > 0, a trapezoid z(s) rising over b
+    from x_c and falling over b to x_c + w): under the contact point z(x) and
+    its slope from the right; uniform pressure: the same difference of its
+    antiderivative (:func:`_trapezoid_integral`), slope (z(x + ℓ/2) − z(x − ℓ/2)) / ℓ;
+    parabolic pressure: exact piecewise quadrature (:func:`_bevelled_parabolic`).
     """
     p = starts
     x, length, xc = inputs["hub_x"], p["footprint_length"], p["cleat_x"]
-    height, width = p["cleat_height"], p["cleat_width"]
-    if length > 0.0 and p.get("parabolic_pressure", False):
+    height, width, bevel = p["cleat_height"], p["cleat_width"], p.get("cleat_bevel", 0.0)
+    if bevel > 0.0 and height != 0.0:
+        x = np.asarray(x, dtype=float)
+        if length > 0.0 and p.get("parabolic_pressure", False):
+            cleat, cleat_slope = _bevelled_parabolic(x, length, xc, height, width, bevel)
+        elif length > 0.0:
+            ends = (x + 0.5 * length, x - 0.5 * length)
+            integral = [_trapezoid_integral(e, xc, height, width, bevel) for e in ends]
+            at_ends = [_trapezoid(e, xc, height, width, bevel)[0] for e in ends]
+            cleat, cleat_slope = (integral[0] - integral[1]) / length, (at_ends[0] - at_ends[1]) / length
+        else:
+            cleat, cleat_slope = _trapezoid(x, xc, height, width, bevel)
+    elif length > 0.0 and p.get("parabolic_pressure", False):
         def cumulative(xi):
             s = np.clip(2.0 * xi / length, -1.0, 1.0)
             return 0.5 + 0.75 * (s - s ** 3 / 3.0)

@@ -201,7 +201,7 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
 
 def diagnose_recording(csv_path: str, stem: str, out_dir: str) -> DiagnosisReport:
     """Diagnose every channel of a recording jointly; keep one extended FMU per tire (in a worker process)."""
-    from .diagnose.command import run_tractor_diagnosis
+    from .diagnose.command import diagnosis_warnings, run_tractor_diagnosis
     from .plots import plot_impact_zooms, plot_tractor_diagnosis, png_bytes
     from .recording import read_recording
 
@@ -215,7 +215,9 @@ def diagnose_recording(csv_path: str, stem: str, out_dir: str) -> DiagnosisRepor
             return rep
     rep.diagnosis = dict(diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after),
                          agreement=gain.agreement, seconds=diag.seconds, fmu_seconds=gain.seconds,
-                         timings={k: round(v, 3) for k, v in diag.timings().items()})
+                         timings={k: round(v, 3) for k, v in diag.timings().items()},
+                         warnings=list((diag.problem.rec.conditioning or {}).get("warnings", []))
+                         + diagnosis_warnings(diag, gain))
     role = "extended tire, fitted jointly with the whole tractor (" + (", ".join(diag.effects) or "no effect") + ")"
     for path in gain.fmu_paths:
         rep.fmus.append({"file": f"fmu/{Path(path).name}", "kind": "extended_tire", "role": role})

@@ -123,6 +123,59 @@ class CleatProfile:
             dr += m * (p1 - p0)
         return r, dr
 
+    @property
+    def builtin_bevel_m(self) -> float:
+        """The bevel of the trapezoid a tire's built-in cleat takes for this profile (m): 0 for a rectangle, the
+        bevel of a bevelled cleat, and for a profile through points the bevel of the trapezoid of the same
+        height, width and area (see :attr:`builtin_exact`)."""
+        if self.kind == "rectangular":
+            return 0.0
+        if self.kind == "bevel":
+            return self.bevel_m
+        xs, zs = np.array(self.xs), np.array(self.zs)
+        area = float(np.sum(np.diff(xs) * (zs[1:] + zs[:-1]) / 2))
+        return min(max(self.width_m - area / self.height_m, 0.0), self.width_m / 2)
+
+    @property
+    def builtin_exact(self) -> bool:
+        """Whether a built-in cleat (a trapezoid, see :attr:`builtin_bevel_m`) is this very profile."""
+        if self.kind != "points":
+            return True
+        b = self.builtin_bevel_m
+        ref = CleatProfile.bevelled(self.height_m, self.width_m, b) if b > 0 else \
+            CleatProfile.rectangular(self.height_m, self.width_m)
+        x = np.linspace(0.0, self.width_m, 401)
+        return bool(np.max(np.abs(self.height(x) - ref.height(x))) <= 1e-3 * self.height_m)
+
+    def on_grid(self, time_s, *, arrival_s: float, speed_m_s: float, step_s: float):
+        """Road height (m) and rate (m/s) under a contact point crossing the profile, at grid times `time_s`.
+
+        The contact point reaches the leading edge at `arrival_s`.  On slopes the rate is v dz/dx (at a kink
+        the mean of its two sides); a vertical edge lies on the grid point nearest to it as a ramp of one step
+        centred on the edge (the height the fraction of the step reached, the rate dz / h), which the stepping
+        applies as an impulse.
+
+        Returns
+        -------
+        road_m, rate_m_s : ndarray
+        edges : list of (grid index, edge time s)
+        """
+        t = np.asarray(time_s, dtype=float)
+        s = speed_m_s * (t - arrival_s)
+        eps = 1e-9 * self.width_m
+        road = self.height(s)
+        rate = 0.5 * speed_m_s * (self.slope(s - eps) + self.slope(s + eps))
+        edges = []
+        for x_e, dz in self.steps():
+            t_e = arrival_s + x_e / speed_m_s
+            i = int(math.floor((t_e - t[0]) / step_s + 0.5))
+            if 0 <= i < t.size:
+                frac = (t[i] - t_e) / step_s + 0.5
+                road[i] = self.height(np.array([x_e]))[0] - dz + dz * frac
+                rate[i] = dz / step_s
+                edges.append((i, t_e))
+        return road, rate, edges
+
     def to_json(self):
         """The sidecar's ``cleat_profile`` value (mm)."""
         if self.kind == "rectangular":

@@ -26,7 +26,9 @@ calls it), in this order:
    than :data:`_CARRIED_RATIO` of the other was carried across by the body (whose roll gives the far
    hub about a quarter of the impact, opposite in sign) and says nothing of its sensor; two comparable
    ones are two own impacts, so the negative one is flipped, except on the front axle, where a
-   pivoting axle also carries the whole impact across: that is warned of and left uncorrected.
+   pivoting axle also carries the whole impact across: that is warned of and left to the diagnosis
+   (``flip_ambiguous``), as is a channel whose impact rises out of no quiet stretch
+   (``sign_undetermined``): :mod:`identification.diagnose.joint_signs` fits each hypothesis.
 4. **The speed from the front/rear delay.**  Where a front and a rear channel of one side are present,
    the delay between their impact onsets gives the speed (wheelbase / delay).  It is reported beside
    the sidecar's, with a warning when the two differ by more than :data:`SPEED_TOLERANCE` (and the two
@@ -390,10 +392,13 @@ def condition(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce:
                     carried.append(small)           # its sign says nothing; the larger one's does
                 elif left[0] == "F":
                     ambiguous += [left, right]      # a pivoting front axle carries the whole impact across
+    undetermined = []
     for i, c in enumerate(names):
         onset, sign, _ = impacts[c]
         if sign != 0:
             onsets[c] = float(t[onset])
+        else:
+            undetermined.append(c)
         if sign < 0 and c not in ambiguous and c not in carried:
             flipped.append(c)
             x[i] = -x[i]
@@ -401,8 +406,10 @@ def condition(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce:
         pairs = " and ".join(f"{a}/{b}" for a, b in zip(ambiguous[::2], ambiguous[1::2]))
         warnings.append(f"channels {pairs} start their impacts at the same time with opposite signs: one "
                         f"sensor may read upside down, or a pivoting axle carried one wheel's impact to the "
-                        f"other; not corrected (check the sensors' mounting)")
+                        f"other; left to the whole-tractor diagnosis (check the sensors' mounting)")
         doc["flip_ambiguous"] = ambiguous
+    if undetermined:                        # no quiet stretch before the impact: the diagnosis decides
+        doc["sign_undetermined"] = undetermined
     if flipped:
         doc["flipped"] = flipped
         warnings.append(f"channel{'s' if len(flipped) > 1 else ''} {', '.join(flipped)}: the impact's first "

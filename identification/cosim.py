@@ -315,10 +315,11 @@ def run_quarter_tractor(fmu_path, *, mass_kg: float, speed_m_s: float, cleat_hei
 
 def run_half_tractor_fmus(fmu_paths, *, loads_n, wheelbase_m: float, dynamic_index: float, speed_m_s: float,
                           cleat_height_m: float, cleat_width_m: float, arrival_s: float, t0_s: float,
-                          duration_s: float, max_step_s: float, start_values=(None, None)):
+                          duration_s: float, max_step_s: float, start_values=(None, None), cleat_profile=None):
     """Two tire FMU instances (front, rear) under the half-tractor, over the cleat.
 
-    The rear tire reaches the cleat wheelbase / speed after the front one.
+    The rear tire reaches the cleat wheelbase / speed after the front one; a
+    `cleat_profile` as in :func:`run_quarter_tractor`.
     Returns a :class:`CosimResult` whose trajectory has the front tire first.
     """
     _check_run(max_step_s, duration_s, speed_m_s)
@@ -333,7 +334,7 @@ def run_half_tractor_fmus(fmu_paths, *, loads_n, wheelbase_m: float, dynamic_ind
             t.initialize(start)
         params = [t.parameters() for t in tires]
         inputs = [t.inputs(n, start, h, arrival_s=arrival_s + lag, speed_m_s=speed_m_s,
-                           cleat_height_m=cleat_height_m, cleat_width_m=cleat_width_m)
+                           cleat_height_m=cleat_height_m, cleat_width_m=cleat_width_m, profile=cleat_profile)
                   for t, lag in zip(tires, (0.0, delay))]
 
         offset = ((0.0, 0.0), (0.0, 0.0))

@@ -36,7 +36,7 @@ color:#1d2733;line-height:1.45;padding:0 1em}
 h1{font-size:1.7em;margin-bottom:.2em}h2{border-bottom:2px solid #3a6ea5;padding-bottom:.2em;margin-top:2em}
 h3{margin-top:1.6em;color:#3a6ea5}table{border-collapse:collapse;margin:.6em 0 1.2em;font-size:.92em}
 th,td{border:1px solid #c9d3de;padding:.3em .6em;text-align:right}th{background:#e8eff7}
-td.l,th.l{text-align:left}.ok{color:#1c7c3a;font-weight:600}.bad{color:#b3261e;font-weight:600}
+td.l,th.l{text-align:left}.ok{color:#1c7c3a;font-weight:600}.bad{color:#b3261e;font-weight:600}.warn{color:#8a5a00}
 .note{color:#556;font-size:.9em}img{max-width:100%;border:1px solid #dde3ea;margin:.4em 0}
 .effect{background:#fff6e0;border-left:4px solid #e0a800;padding:.4em .8em;margin:.4em 0}
 code{background:#eef2f6;padding:0 .25em;border-radius:3px}
@@ -86,6 +86,9 @@ def _summary(result: BatchResult) -> str:
              if any(v["unexplained"] for v in d["tires"].values()) else "residual at the noise floor"))
         detail = _e("; ".join(errors)) if errors else \
             f"{r.speed_kmh:.4g} km/h, {r.sample_rate_hz:.6g} Hz, {_e(found)}"
+        warned = (d or {}).get("warnings") or []
+        if warned:      # what the conditioning and the diagnosis warned of (cleatfmu: warning: ... on the CLI)
+            detail += "".join(f'<br><span class="warn">warning: {_e(w)}</span>' for w in warned)
         rows.append(f'<tr><td class="l">{_e(Path(r.source).name)}</td><td class="l">{status}</td>'
                     f'<td class="l">{detail}</td></tr>')
     n_bad = len(result.failures)

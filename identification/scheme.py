@@ -116,17 +116,10 @@ def tire_inputs(n: int, start_s: float, step_s: float, *, arrival_s: float, spee
     road = np.zeros(n)
     rate = np.zeros(n)
     if external_cleat and profile is not None and not profile.is_rectangular:
-        s = speed_m_s * (t - arrival_s)
-        road = profile.height(s)
-        # the rate: at a kink the mean of its two sides (the scheme's steps then see each side for half)
-        rate = 0.5 * speed_m_s * (profile.slope(s - 1e-9 * profile.width_m) + profile.slope(s + 1e-9 * profile.width_m))
+        road, rate, edges = profile.on_grid(t, arrival_s=arrival_s, speed_m_s=speed_m_s, step_s=step_s)
         edge = [False] * n
-        for x_e, dz in profile.steps():
-            i = int(round((arrival_s + x_e / speed_m_s - start_s) / step_s))
-            if 0 <= i < n:
-                road[i] = profile.height(s[i] - 0.5 * step_s * speed_m_s) + 0.5 * dz if i else road[i]
-                rate[i] = dz / step_s
-                edge[i] = True
+        for i, _ in edges:
+            edge[i] = True
         x = speed_m_s * (t - arrival_s) + x_offset_m
         return TireInputs(road.tolist(), rate.tolist(), x.tolist(), [float(speed_m_s)] * n, edge)
     if external_cleat and cleat_height_m:

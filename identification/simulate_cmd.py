@@ -9,7 +9,6 @@ diagnosed body against every channel
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 from .cliutil import add_example_option, check_output, choose_tire, read_recording_arg
@@ -142,10 +141,6 @@ def _run_tractor(args) -> int:
         raise InputError("--body", "the whole-tractor form (four FMUs or a directory) needs the body and the "
                                    "arrivals: give --body DIAG.json, a 'cleatfmu diagnose REC.csv --json' document")
     rec = _focus(read_recording_arg(args), args)
-    if rec.cleat_profile is not None:
-        print(f"cleatfmu: warning: {rec.source}: the whole-tractor form rides a rectangular cleat of the "
-              f"sidecar's height and width; the cleat_profile {json.dumps(rec.cleat_profile.to_json())} is "
-              f"used by the one-FMU form only", file=sys.stderr)
     check_output(args.plot, ".png", "plot")
     sim = simulate_tractor(paths, rec, args.body, cutoff_hz=args.cutoff_hz, step_s=args.max_step_s)
     if args.plot is not None:

@@ -57,7 +57,7 @@ import math
 __all__ = [
     "CONTACT_MODES", "deflection_m", "deflection_rate_m_s", "force_n", "in_contact",
     "point_contact", "parameter_problem", "value_problem",
-    "EXTENDED_DEFAULTS", "footprint_cleat", "lug_road", "elastic_force", "extended_tire",
+    "EXTENDED_DEFAULTS", "footprint_cleat", "bevel_cleat", "lug_road", "elastic_force", "extended_tire",
     "extended_parameter_problem", "extended_force_fn", "LAW_FIELDS", "law_vector", "tire_force",
 ]
 
@@ -219,6 +219,7 @@ EXTENDED_DEFAULTS = {
     "cleat_x": 0.0,                 # leading edge of the built-in cleat, m (longitudinal)
     "cleat_height": 0.0,            # H, m (0: no built-in cleat)
     "cleat_width": 0.1,             # w, m
+    "cleat_bevel": 0.0,             # b, m (0: vertical edges; else a trapezoid, b <= w / 2)
     "unilateral": False,            # contact can only push
     "stiffness_exponent": 1.0,      # n
     "static_load": 0.0,             # W, N (needed when n != 1)
@@ -230,18 +231,23 @@ EXTENDED_DEFAULTS = {
 }
 
 
-def footprint_cleat(hub_x_m, footprint_m, cleat_x_m, cleat_height_m, cleat_width_m, parabolic=False):
+def footprint_cleat(hub_x_m, footprint_m, cleat_x_m, cleat_height_m, cleat_width_m, parabolic=False,
+                    bevel_m=0.0):
     """Built-in cleat seen by the tire at longitudinal position x: height (m) and slope dr/dx (-).
 
     With a footprint ℓ > 0 the cleat height is averaged over [x − ℓ/2, x + ℓ/2],
     weighted by a uniform or (`parabolic`) a parabolic contact pressure; with
     ℓ = 0 it is the height under the contact point, a rectangular pulse whose
     slope is zero except at its edges (where it is a step the importer must
-    treat as such).
+    treat as such).  A `bevel_m` b > 0 makes the cleat a trapezoid rising from
+    0 to H over b at the leading edge and falling over b at the trailing edge
+    (b ≤ w / 2), see :func:`bevel_cleat`.
     """
     h, w, xc = cleat_height_m, cleat_width_m, cleat_x_m
     if h == 0.0:
         return 0.0, 0.0
+    if bevel_m > 0.0:
+        return bevel_cleat(hub_x_m, footprint_m, xc, h, w, parabolic, bevel_m)
     if footprint_m <= 0.0:
         return (h if xc <= hub_x_m < xc + w else 0.0), 0.0
     if parabolic:
@@ -255,6 +261,45 @@ def footprint_cleat(hub_x_m, footprint_m, cleat_x_m, cleat_height_m, cleat_width
         return 0.0, 0.0
     slope = ((1.0 if hi < xc + w else 0.0) - (1.0 if lo > xc else 0.0)) * h / footprint_m
     return h * (right - left) / footprint_m, slope
+
+
+def bevel_cleat(x, footprint, xc, h, w, parabolic, bevel):
+    """The bevelled (trapezoidal) built-in cleat at x: height (m) and slope dr/dx (-).
+
+    The trapezoid is a sum of four ramps R(s) = max(0, s) with kinks at
+    a = x_c, x_c + b, x_c + w − b, x_c + w and weights H/b · (+1, −1, −1, +1).
+    Each ramp is averaged over the footprint in closed form:
+
+    * point contact (ℓ = 0): R(x − a), slope 1[x ≥ a];
+    * uniform pressure: x − a behind the footprint (a ≤ x − ℓ/2), (x + ℓ/2 − a)² / (2ℓ) inside it, slope
+      (x + ℓ/2 − a) / ℓ there;
+    * parabolic pressure 3/(2ℓ) (1 − u²): (x − a) P + ℓ/2 Q with u_a = clip(2 (a − x) / ℓ, −1, 1),
+      P = 1/2 − 3/4 (u_a − u_a³/3) (the pressure ahead of the kink, the slope) and
+      Q = 3/16 − 3/4 (u_a²/2 − u_a⁴/4).
+    """
+    half = 0.5 * footprint
+    if x - half >= xc + w or x + half < xc:
+        return 0.0, 0.0
+    height, slope = 0.0, 0.0
+    for k in range(4):
+        a = xc + (0.0, bevel, w - bevel, w)[k]
+        s = (1.0, -1.0, -1.0, 1.0)[k] * h / bevel
+        if footprint <= 0.0:
+            if x >= a:
+                height += s * (x - a)
+                slope += s
+        elif parabolic:
+            u = min(1.0, max(-1.0, (a - x) / half))
+            p = 0.5 - 0.75 * (u - u * u * u / 3.0)
+            height += s * ((x - a) * p + half * (0.1875 - 0.75 * (0.5 * u * u - 0.25 * u * u * u * u)))
+            slope += s * p
+        elif a <= x - half:
+            height += s * (x - a)
+            slope += s
+        elif a < x + half:
+            height += s * (x + half - a) * (x + half - a) / (2.0 * footprint)
+            slope += s * (x + half - a) / footprint
+    return height, slope
 
 
 def lug_road(hub_x_m, amplitude_m, pitch_m, phase_rad):
@@ -300,7 +345,7 @@ def extended_tire(hub_z_m, hub_vz_m_s, hub_x_m, hub_vx_m_s, road_z_m, road_vz_m_
         Effective road height under the tire, m.
     """
     cleat, cleat_slope = footprint_cleat(hub_x_m, p["footprint_length"], p["cleat_x"], p["cleat_height"],
-                                         p["cleat_width"], p["parabolic_pressure"])
+                                         p["cleat_width"], p["parabolic_pressure"], p["cleat_bevel"])
     lug, lug_slope = lug_road(hub_x_m, p["lug_amplitude"], p["lug_pitch"], p["lug_phase"])
     road = road_z_m + cleat + lug
     d = p["unloaded_radius"] - (hub_z_m - road)
@@ -323,6 +368,7 @@ def extended_parameter_problem(p):
     if problem is not None:
         return problem
     checks = (("footprint_length", "m", False), ("cleat_height", "m", False), ("cleat_width", "m", True),
+              ("cleat_bevel", "m", False),
               ("stiffness_exponent", "-", True), ("static_load", "N", False), ("friction_force", "N", False),
               ("friction_velocity", "m/s", True), ("lug_pitch", "m", True))
     for name, unit, strictly in checks:
@@ -334,6 +380,8 @@ def extended_parameter_problem(p):
                                 strictly_positive=False)
         if problem is not None:
             return problem
+    if p["cleat_bevel"] > 0.5 * p["cleat_width"]:
+        return f"cleat_bevel must be <= cleat_width / 2 ({0.5 * p['cleat_width']!r} m), got {p['cleat_bevel']!r} m"
     if p["stiffness_exponent"] != 1.0 and not p["static_load"] > 0:
         return "static_load must be > 0 N when stiffness_exponent != 1"
     for name in ("unilateral", "parabolic_pressure"):
@@ -352,7 +400,7 @@ def extended_force_fn(p):
     """
     k, c, r0 = float(p["stiffness"]), float(p["damping"]), float(p["unloaded_radius"])
     fp, xc, hc, wc = p["footprint_length"], p["cleat_x"], p["cleat_height"], p["cleat_width"]
-    parabolic = bool(p["parabolic_pressure"])
+    parabolic, bevel = bool(p["parabolic_pressure"]), p["cleat_bevel"]
     n, w_load = p["stiffness_exponent"], p["static_load"]
     fc, vf = p["friction_force"], p["friction_velocity"]
     la, lp, lph = p["lug_amplitude"], p["lug_pitch"], p["lug_phase"]
@@ -364,7 +412,7 @@ def extended_force_fn(p):
 
     def force(hub_z, hub_vz, hub_x, hub_vx, road_z, road_vz):
         if use_cleat:
-            cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc, parabolic)
+            cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc, parabolic, bevel)
         else:
             cleat, cleat_slope = 0.0, 0.0
         if use_lug:
@@ -389,7 +437,7 @@ def extended_force_fn(p):
 #: Order of the extended tire's parameters in the flat vector of :func:`tire_force`.
 LAW_FIELDS = ("stiffness", "damping", "unloaded_radius", "footprint_length", "cleat_x", "cleat_height",
               "cleat_width", "unilateral", "stiffness_exponent", "static_load", "friction_force",
-              "friction_velocity", "lug_amplitude", "lug_pitch", "lug_phase", "parabolic_pressure")
+              "friction_velocity", "lug_amplitude", "lug_pitch", "lug_phase", "parabolic_pressure", "cleat_bevel")
 
 
 def law_vector(p) -> list:
@@ -402,34 +450,16 @@ def tire_force(hub_z, hub_vz, hub_x, hub_vx, road_z, road_vz, q):
 
     The same operations, in the same order, as :func:`extended_tire`, written
     with scalars and :mod:`math` only, so that a JIT compiler (numba) compiles
-    this very function for the fitting models' compiled stepping while the
-    plain-Python stepping and the FMUs run it as it stands.
+    this very function (and the :func:`footprint_cleat`, :func:`bevel_cleat`
+    and :func:`lug_road` it calls) for the fitting models' compiled stepping while the plain-Python
+    stepping and the FMUs run it as it stands.
     """
     k, c, r0 = q[0], q[1], q[2]
     fp, xc, hc, wc = q[3], q[4], q[5], q[6]
     n, w_load, fc, vf = q[8], q[9], q[10], q[11]
     la, lp, lph = q[12], q[13], q[14]
-    cleat, cleat_slope = 0.0, 0.0
-    if hc != 0.0:
-        if fp <= 0.0:
-            if xc <= hub_x < xc + wc:
-                cleat = hc
-        elif q[15] != 0.0:
-            u1 = min(1.0, max(-1.0, 2.0 * (xc + wc - hub_x) / fp))
-            u0 = min(1.0, max(-1.0, 2.0 * (xc - hub_x) / fp))
-            cleat = 0.75 * hc * ((u1 - u1 * u1 * u1 / 3.0) - (u0 - u0 * u0 * u0 / 3.0))
-            cleat_slope = 1.5 * hc / fp * (u1 * u1 - u0 * u0)
-        else:
-            lo, hi = hub_x - 0.5 * fp, hub_x + 0.5 * fp
-            left, right = max(lo, xc), min(hi, xc + wc)
-            if right > left:
-                cleat = hc * (right - left) / fp
-                cleat_slope = ((1.0 if hi < xc + wc else 0.0) - (1.0 if lo > xc else 0.0)) * hc / fp
-    lug, lug_slope = 0.0, 0.0
-    if la != 0.0:
-        wave = 2.0 * math.pi / lp
-        arg = wave * hub_x + lph
-        lug, lug_slope = la * math.sin(arg), la * wave * math.cos(arg)
+    cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc, q[15] != 0.0, q[16])
+    lug, lug_slope = lug_road(hub_x, la, lp, lph)
     road = road_z + cleat + lug
     d = r0 - (hub_z - road)
     dd = road_vz + (cleat_slope + lug_slope) * hub_vx - hub_vz

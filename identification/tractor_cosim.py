@@ -199,13 +199,18 @@ def build_tractor_fmus(fit, directory, stem: str, *, description_prefix: str = "
 
 @dataclass(frozen=True, eq=False)
 class TractorGain:
-    """Per channel NRMSE of the baseline and final models as FMUs co-simulated with fmpy."""
+    """Per channel NRMSE of the baseline and final models as FMUs co-simulated with fmpy.
+
+    ``note`` says why the baseline's NRMSE is its fitting model's instead (its FMUs could not start: the
+    four-corner fit of a recording it cannot explain may leave a tire that carries no load), else None.
+    """
 
     nrmse_before: dict
     nrmse_after: dict
     agreement: float          # max |FMU − fitting model| / max |fitting model|, final model, all channels
     fmu_paths: list
     seconds: float
+    note: str | None = None
 
 
 def _cosim_predict(fit, paths) -> dict:
@@ -214,7 +219,6 @@ def _cosim_predict(fit, paths) -> dict:
     try:
         traj = run_tractor_fmus(paths, record, **dict(zip(("start_s", "step_s", "n"), model.grid(record))))
     except ValueError as exc:      # a fitted force law that never carries its load: say so, in one line
-        from .errors import InputError
         raise InputError(model.problem.rec.source, f"the {fit.label} model's FMUs cannot start the "
                                                    f"co-simulation: {exc}") from None
     return model.predict(fit.params, trajectory=traj)
@@ -237,7 +241,12 @@ def measure_tractor_gain(diag, fmu_dir=None, *, stem: str | None = None) -> Trac
     stem = stem or Path(pb.rec.source).stem or "tire"
     with tempfile.TemporaryDirectory(prefix="cleatfmu_tractor_") as tmp:
         base_paths = build_tractor_fmus(diag.baseline, tmp, "baseline")
-        before = _cosim_predict(diag.baseline, base_paths)
+        note = None
+        try:
+            before = _cosim_predict(diag.baseline, base_paths)
+        except InputError as exc:      # the final model's FMUs must start; the baseline's are only the reference
+            before = diag.baseline.prediction
+            note = f"{exc.problem}; the four-corner NRMSE is its fitting model's"
         final_paths = build_tractor_fmus(diag.final, tmp, stem)
         after = _cosim_predict(diag.final, final_paths)
         kept = []
@@ -248,7 +257,7 @@ def measure_tractor_gain(diag, fmu_dir=None, *, stem: str | None = None) -> Trac
     scale = max(float(np.max(np.abs(fitting[c]))) for c in pb.channels)
     agreement = max(float(np.max(np.abs(after[c] - fitting[c]))) for c in pb.channels) / max(scale, 1e-12)
     return TractorGain(nrmse_before=_nrmse(pb, before), nrmse_after=_nrmse(pb, after), agreement=agreement,
-                       fmu_paths=kept, seconds=time.perf_counter() - t0)
+                       fmu_paths=kept, seconds=time.perf_counter() - t0, note=note)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -391,6 +400,6 @@ def tractor_from_fmus(fmu_paths, rec, body_doc, *, cutoff_hz: float = DEFAULT_CU
         with TireFmu(paths[t], instance_name=t) as tire:
             laws.append(_fmu_law(tire, rec.wheel_load_N[t]))
     record = TractorModel(body=body, laws=tuple(laws),
-                          cleat=Cleat(rec.cleat_height_m, rec.cleat_width_m, rec.speed_m_s),
+                          cleat=Cleat.of(rec),
                           arrivals_s=tuple(settings["arrivals"][t] for t in pb.channels))
     return model, pb, theta, paths, record, body, settings, source

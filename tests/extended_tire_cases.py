@@ -12,21 +12,27 @@ BOOL_PARAMS = ["unilateral", "parabolic_pressure"]
 REAL_PARAMS = [n for n in law.EXTENDED_DEFAULTS if n not in BOOL_PARAMS]
 REAL_OUTPUTS = ["force_z", "deflection", "deflection_rate", "road_effective_z"]
 OUTPUTS = REAL_OUTPUTS + ["in_contact"]
-#: Option sets of the random cases; "footprint" has a uniform contact pressure, "parabolic" a parabolic one.
-#: The last set switches every option on (the footprint parabolic).
+#: Option sets of the random cases; "footprint" has a uniform contact pressure, "parabolic" a parabolic one;
+#: "bevel" makes the built-in cleat a trapezoid (with a uniform footprint unless combined with "parabolic" or
+#: "point_cleat"). The last set switches every option on (the footprint parabolic, the cleat bevelled).
 OPTION_SETS = [("footprint",), ("point_cleat",), ("unilateral",), ("progressive",), ("friction",), ("lugs",),
-               ("parabolic",), ("parabolic", "unilateral", "progressive", "friction", "lugs")]
+               ("parabolic",), ("bevel",), ("bevel", "parabolic"), ("bevel", "point_cleat"),
+               ("parabolic", "bevel", "unilateral", "progressive", "friction", "lugs")]
 
 
 def random_parameters(rng, options) -> dict:
     """A valid parameter set with random k, c, r0 and the given options switched on."""
     p = dict(law.EXTENDED_DEFAULTS, stiffness=rng.uniform(1e5, 1.5e6), damping=rng.uniform(0.0, 2e4),
              unloaded_radius=rng.uniform(0.4, 1.0))
-    footprint = "footprint" in options or "parabolic" in options
+    footprint = ("footprint" in options or "parabolic" in options
+                 or ("bevel" in options and "point_cleat" not in options))
     if footprint or "point_cleat" in options:
         p.update(footprint_length=rng.uniform(0.05, 0.5) if footprint else 0.0,
                  cleat_x=rng.uniform(-1.0, 1.0), cleat_height=rng.uniform(0.01, 0.08),
                  cleat_width=rng.uniform(0.02, 0.3))
+    if "bevel" in options:  # in (0, w/2]; one case in five a triangle (b = w/2)
+        half = 0.5 * p["cleat_width"]
+        p["cleat_bevel"] = half if rng.random() < 0.2 else half * (1.0 - rng.random())
     if "parabolic" in options:
         p["parabolic_pressure"] = True
     if "unilateral" in options:

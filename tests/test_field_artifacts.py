@@ -163,7 +163,7 @@ def test_a_progressive_tire_on_a_low_cleat_and_periodic_road_excitation_are_name
 def test_a_flip_under_a_coupling_body_and_a_pivoting_axle_are_told_apart():
     """A rigid body carries a quarter of one wheel's impact to the other side, opposite in sign: FR read
     upside down 15 ms after FL is still found.  A pivoting front axle carries the whole impact across, as a
-    flipped sensor would look: both front channels are named as ambiguous and left as recorded."""
+    flipped sensor would look: both front channels are named as ambiguous and left to the diagnosis."""
     run = _run(("axle_coupling",), seed=0, **{"sensor.flipped": "FR"})
     doc = condition(run.recording, announce=False).conditioning
     assert doc["flipped"] == ["FR"] and "flip_ambiguous" not in doc
@@ -174,3 +174,21 @@ def test_a_flip_under_a_coupling_body_and_a_pivoting_axle_are_told_apart():
     doc = condition(pivot.recording, announce=False).conditioning
     assert doc.get("flipped") is None and doc["flip_ambiguous"] == ["FL", "FR"]
     assert any("pivoting axle" in w for w in doc["warnings"])
+
+
+def test_a_front_flip_beside_the_other_front_impact_is_settled_by_the_joint_fit():
+    """FL read upside down while FR hits the cleat 3.5 ms later (7 mm stagger): the conditioning cannot tell
+    it from a pivoting axle and leaves it open; the joint fit of the front channels under each sign
+    hypothesis chooses FL reversed, by far, and gets k and c right."""
+    from identification.diagnose.joint_select import diagnose_tractor
+
+    run = run_rig((), {"speed_kmh": 7.0, "cleat.stagger_m": 0.0068, "sensor.flipped": "FL"}, seed=1)
+    assert condition(run.recording, announce=False).conditioning["flip_ambiguous"] == ["FL", "FR"]
+    diag = diagnose_tractor(run.recording, effects=(), channels=("FL", "FR"))
+    test = diag.to_json()["sign_test"]
+    assert test["chosen"] == "FL" and test["margin"] > 100, test
+    assert diag.problem.rec.conditioning["flipped"] == ["FL"]
+    for t in diag.channels:
+        assert diag.final.params[f"k_{t}"] == pytest.approx(run.truth["tires"][t]["k"], rel=0.03), t
+        assert diag.final.params[f"c_{t}"] == pytest.approx(run.truth["tires"][t]["c"], rel=0.10), t
+

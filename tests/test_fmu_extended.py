@@ -29,7 +29,7 @@ VALUE_REFERENCES = ["hub_z", "hub_vz", "road_z", "road_vz", "hub_x", "hub_vx", "
                     "stiffness_exponent", "static_load", "friction_force", "friction_velocity", "lug_amplitude",
                     "lug_pitch", "lug_phase", "force_z", "deflection", "deflection_rate", "in_contact",
                     "road_effective_z",
-                    "parabolic_pressure"]  # appended
+                    "parabolic_pressure", "cleat_bevel"]  # appended, in this order
 
 
 def test_value_references_of_existing_variables_never_change(fmu, vr):
@@ -181,6 +181,163 @@ def test_parabolic_footprint_in_the_fmu(slave, vr):
     assert s.getReal([vr["road_effective_z"]])[0] - road_z == pytest.approx(0.05 * 0.1 / 0.3, rel=1e-12)
 
 
+def _trapezoid_height(s, xc, height, width, bevel):
+    """The bevelled cleat at s: 0 outside [xc, xc + w], rising linearly over the bevel b to H, H on its top."""
+    return height * min(1.0, max(0.0, min(s - xc, xc + width - s) / bevel))
+
+
+def _bevelled_cleat_by_quadrature(x, length, xc, height, width, bevel, parabolic):
+    """The bevelled cleat averaged over the footprint [x - l/2, x + l/2] under a uniform (1/l) or parabolic
+    (3/(2 l) (1 - u^2), u = 2 (s - x) / l) pressure, integrated numerically piece by piece between the
+    trapezoid's corners; with l = 0 the trapezoid's height at x."""
+    from scipy.integrate import quad
+
+    if length == 0.0:
+        return _trapezoid_height(x, xc, height, width, bevel)
+    lo, hi = x - 0.5 * length, x + 0.5 * length
+
+    def weighted(s):
+        pressure = 1.5 / length * (1.0 - (2.0 * (s - x) / length) ** 2) if parabolic else 1.0 / length
+        return _trapezoid_height(s, xc, height, width, bevel) * pressure
+
+    cuts = sorted({lo, hi} | {min(max(xc + k, lo), hi) for k in (0.0, bevel, width - bevel, width)})
+    return sum(quad(weighted, a, b, epsabs=1e-15, epsrel=1e-14)[0] for a, b in zip(cuts[:-1], cuts[1:]) if b > a)
+
+
+#: (footprint l, cleat width w, bevel b, parabolic pressure) of the bevelled cleats checked against quadrature:
+#: under the contact point a trapezoid and a triangle (b = w/2); footprints longer and shorter than the cleat,
+#: over a triangle, and shorter than the bevel, under both pressures.
+BEVELLED = [(0.0, 0.1, 0.02, False), (0.0, 0.1, 0.05, False),
+            *((length, width, bevel, parabolic) for parabolic in (False, True)
+              for length, width, bevel in ((0.3, 0.1, 0.02), (0.08, 0.2, 0.05), (0.25, 0.25, 0.125),
+                                           (0.02, 0.1, 0.03)))]
+
+
+@pytest.mark.parametrize("length, width, bevel, parabolic", BEVELLED,
+                         ids=[f"{'parabolic' if c[3] else 'uniform' if c[0] else 'point'}-l{c[0]}-w{c[1]}-b{c[2]}"
+                              for c in BEVELLED])
+def test_bevelled_cleat_is_the_pressure_weighted_average_of_the_trapezoid(length, width, bevel, parabolic):
+    """The law's bevelled cleat (a sum of four ramps) against quadrature of the trapezoid itself (height, to
+    1e-12 m) and central differences of that quadrature (slope); the law's three forms agree bit for bit."""
+    from scipy.integrate import quad
+
+    xc, height, h, speed = 0.5, 0.05, 1e-6, 2.0
+    p = {**law.EXTENDED_DEFAULTS, "footprint_length": length, "cleat_x": xc, "cleat_height": height,
+         "cleat_width": width, "cleat_bevel": bevel, "parabolic_pressure": parabolic}
+    assert law.extended_parameter_problem(p) is None
+    force_fn, q = law.extended_force_fn(p), law.law_vector(p)
+    corners = np.array([xc, xc + bevel, xc + width - bevel, xc + width])
+    # where an end of the footprint passes a corner of the trapezoid the slope has a kink: no difference there
+    kinks = np.concatenate([corners - 0.5 * length, corners + 0.5 * length])
+    xs = [x for x in np.linspace(kinks.min() - 0.05, kinks.max() + 0.05, 121) if np.abs(x - kinks).min() > 1e-4]
+    ramps = 0
+    for x in xs:
+        cleat, slope = law.footprint_cleat(x, length, xc, height, width, parabolic, bevel)
+        args = (length, xc, height, width, bevel, parabolic)
+        assert abs(cleat - _bevelled_cleat_by_quadrature(x, *args)) <= 1e-12, x
+        by_difference = (_bevelled_cleat_by_quadrature(x + h, *args)
+                         - _bevelled_cleat_by_quadrature(x - h, *args)) / (2.0 * h)
+        assert abs(slope - by_difference) <= 1e-7 * max(1.0, abs(slope)), (x, slope, by_difference)
+        f, _, dd, _, road = law.extended_tire(0.74, 0.0, x, speed, 0.0, 0.0, p)
+        assert (road, dd) == (cleat, slope * speed)
+        assert law.tire_force(0.74, 0.0, x, speed, 0.0, 0.0, q) == f == force_fn(0.74, 0.0, x, speed, 0.0, 0.0)
+        ramps += 0.0 < cleat and slope != 0.0
+    assert ramps >= 15
+    # every pressure spreads the same area, the trapezoid's H (w - b), along x
+    area, _ = quad(lambda x: law.footprint_cleat(x, length, xc, height, width, parabolic, bevel)[0],
+                   kinks.min(), kinks.max(), points=np.unique(kinks)[1:-1], epsabs=1e-14, limit=200)
+    assert area == pytest.approx(height * (width - bevel), rel=1e-9)
+
+
+#: Bevels of the fmpy runs: under the contact point, uniform and parabolic footprint pressures.
+BEVEL_RUNS = {"point contact": {"footprint_length": 0.0}, "uniform": {}, "parabolic": {"parabolic_pressure": True}}
+
+
+@pytest.mark.parametrize("run", list(BEVEL_RUNS))
+def test_bevelled_cleat_stepped_in_fmpy_gives_the_independent_closed_form_in_both_backends(fmu, tmp_path, run):
+    """The reference experiment (every option on) over a cleat with 30 mm bevels, stepped by fmpy: the
+    pythonfmu FMU (built with the bevel, or switched to it before initialization) and the native FMU give
+    the Python law's outputs for the inputs held over each step, and build_scripts/reference.py's
+    independent closed form of the trapezoid's footprint average."""
+    from build_scripts.runners import simulate_fmpy
+
+    kind = load_kind(KIND)
+    starts = {**kind.reference_start_values, "cleat_bevel": 0.03, **BEVEL_RUNS[run]}
+    p = {**law.EXTENDED_DEFAULTS, **starts}
+    assert law.extended_parameter_problem(p) is None
+    ref = read_reference(KIND)
+    signals = {n: ref[n] for n in ["time", *INPUTS]}
+    held = {n: np.concatenate([signals[n][:1], signals[n][:-1]]) for n in INPUTS}  # fmpy's alignment
+    rows = [law.extended_tire(*(float(held[n][k]) for n in ("hub_z", "hub_vz", "hub_x", "hub_vx", "road_z",
+                                                            "road_vz")), p) for k in range(ref["time"].size)]
+    expected = {name: np.array([row[j] for row in rows]) for j, name in
+                enumerate(("force_z", "deflection", "deflection_rate", "in_contact", "road_effective_z"))}
+    closed = closed_form_outputs(KIND, signals, p)
+    # the bevel matters in this run: another road under the tire than over the rectangle, on the bevels' ramps
+    square = closed_form_outputs(KIND, signals, {**p, "cleat_bevel": 0.0})
+    assert np.abs(closed["road_effective_z"] - square["road_effective_z"]).max() > 1e-3
+    if run == "point contact":  # the bevels' slope is felt: H / b * hub_vx
+        assert np.isclose(np.abs(closed["deflection_rate"] - square["deflection_rate"]),
+                          0.05 / 0.03 * 7.0 / 3.6, rtol=1e-9).sum() >= 20
+    runs = {"pythonfmu built with the bevel": (build_fmu(KIND, tmp_path / "py.fmu", start_values=starts), None),
+            "pythonfmu switched before initialization": (fmu, starts),
+            "native built with the bevel": (build_fmu(KIND, tmp_path / "native.fmu", backend="native",
+                                                      start_values=starts, platforms=["linux64"]), None)}
+    for label, (path, start_values) in runs.items():
+        sim = simulate_fmpy(path, signals, OUTPUTS, start_values=start_values)
+        for name in OUTPUTS:
+            if name == "in_contact":
+                assert np.array_equal(sim[name], expected[name]) and np.array_equal(sim[name], closed[name]), label
+                continue
+            if label.startswith("pythonfmu"):  # the very same law code
+                assert np.array_equal(sim[name], expected[name]), (label, name)
+            else:
+                np.testing.assert_allclose(sim[name], expected[name], rtol=1e-12, atol=0.0, err_msg=f"{label}: {name}")
+            np.testing.assert_allclose(sim[name], closed[name], rtol=kind.reference_rtol, atol=kind.reference_atol,
+                                       err_msg=f"{label}: {name} (closed form)")
+
+
+def test_a_bevel_beyond_half_the_cleat_width_is_refused_naming_cleat_bevel(slave, vr, tmp_path):
+    """b <= w/2 is a constraint between parameters: a bevel set before the width that allows it is accepted,
+    but reading an output, stepping and leaving initialization fail, naming cleat_bevel, until it holds; a
+    negative or non-finite bevel is refused as it is set; a build with such a bevel is refused."""
+    from fmpy.fmi1 import FMICallException
+
+    s, messages = slave
+    s.setReal([vr["cleat_height"], vr["cleat_x"]], [0.04, 0.0])
+    s.setReal([vr["cleat_bevel"]], [0.08])  # the width is still 0.1 m
+    for call in (lambda: s.getReal([vr["road_effective_z"]]), lambda: s.getBoolean([vr["in_contact"]]),
+                 lambda: s.doStep(0.0, 1e-3)):
+        with pytest.raises(FMICallException):
+            call()
+    reason = "cleat_bevel must be <= cleat_width / 2 (0.05 m), got 0.08 m"
+    assert sum(status == 3 and reason in m for status, m in messages) == 3, messages
+    s.setReal([vr["cleat_width"]], [0.2])  # now b = 0.08 m <= 0.1 m
+    s.setReal([vr["hub_x"], vr["hub_vx"]], [0.04, 2.0])  # on the leading bevel, half way up
+    road, rate = s.getReal([vr["road_effective_z"], vr["deflection_rate"]])
+    assert road == pytest.approx(0.04 * 0.04 / 0.08, rel=1e-12) and rate == pytest.approx(0.04 / 0.08 * 2.0)
+    s.doStep(0.0, 1e-3)
+    for value, words in ((-0.01, "cleat_bevel must be >= 0 m"), (math.inf, "cleat_bevel")):
+        count = len(messages)
+        with pytest.raises(FMICallException):
+            s.setReal([vr["cleat_bevel"]], [value])
+        assert any(status == 3 and words in m for status, m in messages[count:]), messages[count:]
+        assert s.getReal([vr["cleat_bevel"]]) == [0.08]
+    s.reset()
+    s.setupExperiment(startTime=0.0)
+    s.setReal([vr["cleat_bevel"]], [0.06])  # the start width 0.1 m allows 0.05 m
+    s.enterInitializationMode()
+    count = len(messages)
+    with pytest.raises(FMICallException):
+        s.exitInitializationMode()
+    assert any(status == 3 and "cleat_bevel must be <= cleat_width / 2" in m for status, m in messages[count:])
+    for backend in ("pythonfmu", "native"):
+        with pytest.raises(ValueError, match=r"cleat_bevel must be <= cleat_width / 2 \(0.05 m\), got 0.06 m"):
+            build_fmu(KIND, tmp_path / f"{backend}.fmu", start_values={"cleat_bevel": 0.06}, backend=backend,
+                      platforms=["linux64"] if backend == "native" else None)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_without_footprint_the_cleat_is_felt_under_the_contact_point_only(slave, vr):
     s, _ = slave
     s.setReal([vr[n] for n in CLEAT], [0.0, *list(CLEAT.values())[1:]])
@@ -243,7 +400,7 @@ EXPECTED_UNITS = {"hub_z": "m", "hub_vz": "m/s", "road_z": "m", "road_vz": "m/s"
                   "cleat_x": "m", "cleat_height": "m", "cleat_width": "m", "stiffness_exponent": "1",
                   "static_load": "N", "friction_force": "N", "friction_velocity": "m/s", "lug_amplitude": "m",
                   "lug_pitch": "m", "lug_phase": "rad", "force_z": "N", "deflection": "m", "deflection_rate": "m/s",
-                  "road_effective_z": "m"}
+                  "road_effective_z": "m", "cleat_bevel": "m"}
 EXPECTED_INPUT_DEPENDENCIES = {"force_z": set(INPUTS), "in_contact": set(INPUTS),
                                "deflection": {"hub_z", "road_z", "hub_x"},
                                "deflection_rate": {"hub_vz", "road_vz", "hub_x", "hub_vx"},
@@ -313,7 +470,7 @@ def test_build_writes_every_start_value_including_the_boolean_and_the_descriptio
               "cleat_x": -0.3, "cleat_height": 0.04, "cleat_width": 0.08, "unilateral": True,
               "stiffness_exponent": 1.25, "static_load": 12000.0, "friction_force": 300.0,
               "friction_velocity": 0.02, "lug_amplitude": 0.003, "lug_pitch": 0.3, "lug_phase": 0.7,
-              "parabolic_pressure": True}
+              "parabolic_pressure": True, "cleat_bevel": 0.015}
     fmu = build_fmu(KIND, tmp_path / "FL.fmu", start_values=starts, description="front left, test day 3")
     root = model_description(fmu)
     assert root.get("description") == "front left, test day 3"
@@ -338,6 +495,9 @@ def test_build_writes_every_start_value_including_the_boolean_and_the_descriptio
     ({"stiffness_exponent": True}, "finite number"),
     ({"lug_phase": math.nan}, "finite"), ({"stiffness_exponent": 1.4}, "static_load must be > 0"),
     ({"cleat_width": 0.0}, "cleat_width must be > 0"),
+    ({"cleat_bevel": -0.001}, "cleat_bevel must be >= 0 m"),
+    ({"cleat_bevel": 0.06}, r"cleat_bevel must be <= cleat_width / 2 \(0.05 m\), got 0.06 m"),
+    ({"cleat_bevel": 0.03, "cleat_width": 0.05}, "cleat_bevel must be <= cleat_width / 2"),
 ])
 def test_build_rejects_invalid_start_values(tmp_path, starts, match):
     with pytest.raises(ValueError, match=match):

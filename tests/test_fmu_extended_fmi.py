@@ -116,6 +116,7 @@ def test_reset_returns_to_the_start_values(slave, vr):
     ("static_load", -1.0, "static_load must be >= 0"), ("friction_force", -5.0, "friction_force must be >= 0"),
     ("friction_velocity", 0.0, "friction_velocity must be > 0"), ("lug_pitch", -0.25, "lug_pitch must be > 0"),
     ("cleat_x", math.nan, "cleat_x = nan"), ("lug_phase", math.inf, "lug_phase = inf"),
+    ("cleat_bevel", -0.01, "cleat_bevel must be >= 0 m"), ("cleat_bevel", math.nan, "cleat_bevel = nan"),
     ("hub_x", math.nan, "hub_x = nan"), ("hub_vx", -math.inf, "hub_vx = -inf"), ("road_z", math.nan, "road_z = nan"),
 ])
 def test_invalid_values_give_an_error_status_with_the_reason(slave, vr, name, value, reason):

@@ -61,8 +61,8 @@ def test_progressive_tire_starts_at_its_equilibrium_off_the_built_in_cleat(tmp_p
 
 
 def _draw_extended(rng):
-    """Random parameters (each option on or off, the footprint's pressure uniform or parabolic) and inputs
-    near the built-in cleat."""
+    """Random parameters (each option on or off, the footprint's pressure uniform or parabolic, the built-in
+    cleat rectangular or, in half the cases, bevelled with b in (0, w/2]) and inputs near the built-in cleat."""
     on = rng.random(6) < 0.6
     p = {"stiffness": rng.uniform(1e5, 1e6), "damping": rng.uniform(0.0, 8e3), "unloaded_radius": rng.uniform(0.4, 1.0),
          "footprint_length": rng.uniform(0.05, 0.5) if on[0] else 0.0, "cleat_x": rng.uniform(-0.5, 0.5),
@@ -72,6 +72,7 @@ def _draw_extended(rng):
          "friction_velocity": rng.uniform(1e-3, 0.1), "lug_amplitude": rng.uniform(-3e-3, 3e-3) if on[5] else 0.0,
          "lug_pitch": rng.uniform(0.1, 0.5), "lug_phase": rng.uniform(-4.0, 4.0),
          "parabolic_pressure": bool(rng.random() < 0.5)}
+    p["cleat_bevel"] = 0.5 * p["cleat_width"] * (1.0 - rng.random()) if rng.random() < 0.5 else 0.0
     deflection = p["stiffness_exponent"] * p["static_load"] / p["stiffness"]
     u = {"hub_z": p["unloaded_radius"] - deflection + rng.uniform(-0.08, 0.08), "hub_vz": rng.normal(0, 0.5),
          "road_z": rng.uniform(-0.02, 0.02), "road_vz": rng.normal(0, 0.3),
@@ -92,8 +93,9 @@ def test_c_law_agrees_with_the_python_law_on_random_inputs_over_every_option(nat
     rng = np.random.default_rng(20261123)
     s = open_fmpy_slave(fmu)
     seen_contact, footprints = set(), {False: 0, True: 0}
+    bevels = {"point contact": 0, "uniform": 0, "parabolic": 0}
     try:
-        for i in range(3000):
+        for i in range(8000):
             p, u = _draw_extended(rng)
             s.setReal([refs[n][0] for n in real_params], [p[n] for n in real_params])
             s.setBoolean([refs[n][0] for n in flags], [p[n] for n in flags])
@@ -107,14 +109,21 @@ def test_c_law_agrees_with_the_python_law_on_random_inputs_over_every_option(nat
             assert bool(contact) == bool(c), f"draw {i}"
             seen_contact.add((p["unilateral"], bool(c)))
             cleat, slope = tire_law.footprint_cleat(u["hub_x"], p["footprint_length"], p["cleat_x"],
-                                                    p["cleat_height"], p["cleat_width"], p["parabolic_pressure"])
-            if p["footprint_length"] > 0.0 and cleat > 0.0 and slope != 0.0:  # the cleat partly in the footprint
+                                                    p["cleat_height"], p["cleat_width"], p["parabolic_pressure"],
+                                                    p["cleat_bevel"])
+            on_ramp = cleat > 0.0 and slope != 0.0
+            if p["footprint_length"] > 0.0 and on_ramp and p["cleat_bevel"] == 0.0:  # partly in the footprint
                 footprints[p["parabolic_pressure"]] += 1
+            if p["cleat_bevel"] > 0.0 and on_ramp:  # on a bevel, or a bevel partly in the footprint
+                bevels["point contact" if p["footprint_length"] == 0.0 else
+                       "parabolic" if p["parabolic_pressure"] else "uniform"] += 1
         s.terminate()
     finally:
         s.freeInstance()
     assert seen_contact == {(False, False), (False, True), (True, False), (True, True)}
     assert min(footprints.values()) >= 100, footprints  # both footprint pressures on the cleat's ramps
+    # bevelled cleats on the ramps: under the contact point (on a bevel) and partly in both footprint pressures
+    assert bevels["point contact"] >= 40 and min(bevels["uniform"], bevels["parabolic"]) >= 150, bevels
 
 
 def test_parabolic_footprint_step_run_reproduces_the_python_law_in_both_backends(native_fmus, tmp_path):
@@ -189,7 +198,9 @@ def test_refused_values_are_fmi2Error_with_a_logged_reason_and_the_instance_stay
     try:
         before = s.getReal([refs["stiffness"], refs["force_z"]])
         for name, value, reason in (("stiffness", -1.0, "stiffness must be > 0"), ("hub_z", math.nan, "finite"),
-                                    ("damping", math.inf, "finite"), ("force_z", 1.0, "is not a Real")):
+                                    ("damping", math.inf, "finite"), ("force_z", 1.0, "is not a Real"),
+                                    ("cleat_bevel", -0.01, "cleat_bevel must be >= 0 m"),
+                                    ("cleat_bevel", math.nan, "cleat_bevel = nan")):
             with pytest.raises(FMICallException) as info:
                 s.setReal([refs[name]], [value])
             assert info.value.status == 3  # fmi2Error, not fmi2Fatal
@@ -203,6 +214,15 @@ def test_refused_values_are_fmi2Error_with_a_logged_reason_and_the_instance_stay
         s.setReal([refs["static_load"]], [15000.0])
         assert s.getReal([refs["force_z"]])[0] > 0.0
         s.doStep(1e-3, 1e-3)
+        s.setReal([refs["cleat_bevel"]], [0.08])  # > cleat_width / 2 (0.05 m) until the width is set: accepted
+        for call in (lambda: s.getReal([refs["force_z"]]), lambda: s.doStep(2e-3, 1e-3)):
+            with pytest.raises(FMICallException) as info:
+                call()
+            assert info.value.status == 3
+            assert "cleat_bevel must be <= cleat_width / 2" in messages[-1][2], messages[-1]
+        s.setReal([refs["cleat_width"]], [0.16])
+        assert s.getReal([refs["cleat_bevel"]]) == [0.08] and s.getReal([refs["force_z"]])[0] > 0.0
+        s.doStep(2e-3, 1e-3)
         s.terminate()
     finally:
         s.freeInstance()

@@ -313,3 +313,21 @@ def test_the_progress_bar_shows_from_the_first_second(tmp_path, monkeypatch):
     assert draws and draws[0] < 1.0, draws                       # drawn within the first second
     assert sum(1 for t in draws if 1.0 < t < 1.8) >= 1, draws    # redrawn while the first job still runs
     assert "0/2" in terminal.getvalue() and "2/2" in terminal.getvalue()
+
+
+def test_the_summary_shows_what_conditioning_and_diagnosis_warned_of():
+    """A recording whose diagnosis warned (a sign settled by the joint fit, an engine line removed): each
+    warning is on its summary row, escaped; a recording without warnings shows none."""
+    from identification.batch import BatchResult, DiagnosisReport, RecordingReport
+    from identification.report_html import _summary
+
+    warned = ["steady vibration at 45.00 Hz and 2 of its orders on every channel (engine) removed",
+              "the signs of FL/FR tested in the joint fit: FL reads upside down (sign corrected) <by BIC>"]
+    recs = [RecordingReport(source=f"/d/{name}.csv", stem=name, ok=True, speed_kmh=7.0, sample_rate_hz=1000.0,
+                            diagnosis=DiagnosisReport(recording=name, diagnosis={
+                                "effects": [], "tires": {"FL": {"unexplained": None}}, "warnings": w}))
+            for name, w in (("a", warned), ("b", []))]
+    html = _summary(BatchResult(recordings=recs, out_dir="/d", seconds=1.0, timings={}))
+    rows = html.split("<tr>")[2:]
+    assert all(f"warning: {w.replace('<', '&lt;').replace('>', '&gt;')}" in rows[0] for w in warned)
+    assert "warning" not in rows[1]

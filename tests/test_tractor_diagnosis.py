@@ -80,6 +80,10 @@ def test_pivoting_front_axle_with_the_right_cleat_first_is_found_and_every_tire_
     truth_stagger = run.truth["tires"]["FR"]["arrival_s"] - run.truth["tires"]["FL"]["arrival_s"]
     assert diag.final.params["stagger"] == pytest.approx(truth_stagger, abs=2e-3)
     assert diag.to_json()["body"]["front_axle"] == "pivot"
+    # the conditioning cannot tell the carried impact from a sensor upside down; the joint fit keeps both signs
+    cond = diag.problem.rec.conditioning
+    assert cond["flip_ambiguous"] == ["FL", "FR"] and "flipped" not in cond
+    assert diag.extra.get("sign_test") is None or diag.extra["sign_test"]["chosen"] == "as recorded"
 
 
 @pytest.fixture(scope="module")

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from identification import tire_law
+from identification.cleat import CleatProfile
 from identification.model import Body, Cleat, TractorModel, cleat_inputs
 from identification.model.kernels import run_model
 from identification.model.stepping import run_model_python
@@ -16,7 +17,13 @@ BODIES = [dict(), dict(pitch=True), dict(roll=True), dict(pitch=True, roll=True)
           dict(pitch=True, roll=True, pivot=True)]
 
 
+#: the bevel of the bevelled-cleat cases, m (on the 100 mm cleat)
+BEVEL = 0.02
+
+
 def _record(body_kw, *, options=None, seed=0):
+    """The tractor with each tire's law given `options`; with "bevel" the cleat (the road of the point-contact
+    tires, the built-in cleat of the footprint ones) is a trapezoid with BEVEL."""
     rng = np.random.default_rng(seed)
     body = Body(TIRES, LOADS, L, pitch_index=0.8, roll_index=0.47, pivot_index=0.06, **body_kw)
     laws = []
@@ -24,7 +31,8 @@ def _record(body_kw, *, options=None, seed=0):
         p = dict(tire_law.EXTENDED_DEFAULTS, stiffness=k, damping=c, static_load=w)
         for opt in options or ():
             if opt == "footprint":
-                p.update(footprint_length=rng.uniform(0.2, 0.5), cleat_height=H, cleat_width=W)
+                p.update(footprint_length=rng.uniform(0.2, 0.5), cleat_height=H, cleat_width=W,
+                         cleat_bevel=BEVEL if "bevel" in options else 0.0)
             elif opt == "unilateral":
                 p.update(unilateral=True)
             elif opt == "exponent":
@@ -34,10 +42,13 @@ def _record(body_kw, *, options=None, seed=0):
             elif opt == "lugs":
                 p.update(lug_amplitude=1e-3, lug_pitch=rng.uniform(0.15, 0.3), lug_phase=rng.uniform(0, 6))
         laws.append(p)
-    return TractorModel(body, tuple(laws), Cleat(0.06 if "unilateral" in (options or ()) else H, W, V), ARRIVALS)
+    height = 0.06 if "unilateral" in (options or ()) else H
+    profile = CleatProfile.bevelled(height, W, BEVEL) if "bevel" in (options or ()) else None
+    return TractorModel(body, tuple(laws), Cleat(height, W, V, profile), ARRIVALS)
 
 
 @pytest.mark.parametrize("options", [(), ("footprint",), ("unilateral",), ("exponent",), ("friction",), ("lugs",),
+                                     ("bevel",), ("footprint", "bevel"),
                                      ("footprint", "unilateral", "exponent", "friction", "lugs")])
 @pytest.mark.parametrize("body", BODIES, ids=lambda b: "+".join(b) or "corners")
 def test_compiled_stepping_equals_the_reference(body, options):
@@ -117,6 +128,52 @@ def test_tractor_stepping_matches_python_control_and_converges(pivot):
         errors.append(max(float(np.sqrt(np.mean((s - r) ** 2) / np.mean(r ** 2))) for s, r in zip(sim, ref)))
     assert errors[-1] <= 0.005, errors
     assert errors[0] > errors[1] > errors[2] > errors[3], errors
+
+
+def _control_bevelled_mean_acceleration(times, ts):
+    """Mean hub accelerations over each sample interval from python-control's forced response of the rigid
+    tractor (pitch, roll) to the bevelled cleat's road rates: +H/b v while a contact point climbs the leading
+    bevel, -H/b v on the trailing one, on a 10 us grid."""
+    J, Mm = _geometry(False)
+    nq = J.shape[1]
+    k, c = np.diag(K), np.diag(C)
+    Minv = np.linalg.inv(Mm)
+    A = np.zeros((2 * nq + 4, 2 * nq + 4))
+    A[:nq, nq:2 * nq] = np.eye(nq)
+    A[nq:2 * nq, :nq] = -Minv @ J.T @ k @ J
+    A[nq:2 * nq, nq:2 * nq] = -Minv @ J.T @ c @ J
+    A[nq:2 * nq, 2 * nq:] = Minv @ J.T @ k
+    B = np.zeros((2 * nq + 4, 4))
+    B[nq:2 * nq, :] = Minv @ J.T @ c
+    B[2 * nq:, :] = np.eye(4)
+    Cout = np.hstack([np.zeros((4, nq)), J, np.zeros((4, 4))])      # hub velocities
+    dt = 1e-5
+    grid = np.arange(0.0, times[-1] + 0.01, dt)
+    rates = np.zeros((4, grid.size))
+    mid = grid + dt / 2                                             # the rate held over each interval
+    for i, t_arr in enumerate(ARRIVALS):
+        s = V * (mid - t_arr)
+        rates[i] = np.where((s >= 0) & (s < BEVEL), H / BEVEL * V, 0.0) \
+            - np.where((s >= W - BEVEL) & (s < W), H / BEVEL * V, 0.0)
+    sysd = control.c2d(control.ss(A, B, Cout, np.zeros((4, 4))), dt, method="zoh")
+    vel = np.asarray(control.forced_response(sysd, grid, rates).outputs)
+    return np.array([(np.interp(times + ts / 2, grid, v) - np.interp(times - ts / 2, grid, v)) / ts for v in vel])
+
+
+def test_bevelled_cleat_stepping_matches_python_control():
+    """Point contact over a bevelled cleat: the road is the trapezoid, its rate the bevels' slopes times v."""
+    ts = 1e-3
+    times = np.arange(0.3, 3.2, ts)
+    ref = np.array([lowpass(r, sample_rate_hz=1 / ts) for r in _control_bevelled_mean_acceleration(times, ts)])
+    model = _record(dict(pitch=True, roll=True), options=("bevel",))
+    traj = run_model(model, *model.grid(0.1, 3.3, 1.25e-4, ts))      # first order in h: 1.3 % at 1 ms
+    sim = np.array([lowpass(traj.mean_acceleration(i, times, ts), sample_rate_hz=1 / ts) for i in range(4)])
+    errors = [float(np.sqrt(np.mean((s - r) ** 2) / np.mean(r ** 2))) for s, r in zip(sim, ref)]
+    assert max(errors) <= 0.005, errors
+    rect = _record(dict(pitch=True, roll=True))                     # the rectangle is far from it
+    sharp = np.array([lowpass(run_model(rect, *rect.grid(0.1, 3.3, 2.5e-4, ts)).mean_acceleration(i, times, ts),
+                              sample_rate_hz=1 / ts) for i in range(4)])
+    assert min(float(np.sqrt(np.mean((s - r) ** 2) / np.mean(r ** 2))) for s, r in zip(sharp, ref)) > 0.1
 
 
 def test_track_width_does_not_enter():

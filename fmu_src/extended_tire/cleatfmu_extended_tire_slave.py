@@ -4,8 +4,9 @@ A force element between road and hub in absolute coordinates (SI units, z
 upwards, x along the travel): the point-contact spring k parallel to damper c,
 with the options of ``identification/tire_law.py`` (:func:`extended_tire`),
 each a tunable parameter whose default switches it off — a built-in
-rectangular cleat enveloped by a footprint (uniform contact pressure, or
-parabolic with ``parabolic_pressure``), road-equivalent lugs, progressive
+cleat, rectangular or bevelled (a trapezoid, ``cleat_bevel``), enveloped by a
+footprint (uniform contact pressure, or parabolic with
+``parabolic_pressure``), road-equivalent lugs, progressive
 stiffness, regularised Coulomb friction and unilateral contact.  With every
 option at its default the force is the point-contact tire's.
 
@@ -22,10 +23,10 @@ Runtime contract (this file runs inside the FMU, on the importing machine):
   folder (``cleatfmu_extended_tire_start.json``), never from module-level
   state, so that several FMUs of this kind in one process each keep theirs;
 * importers set parameters one at a time, so a value is refused when set only
-  if it is invalid by itself (:func:`_value_problem`); the one constraint
-  between parameters (static_load > 0 N when stiffness_exponent != 1) makes
-  the next evaluation, step or exit from initialization mode fail until it
-  holds.
+  if it is invalid by itself (:func:`_value_problem`); the constraints
+  between parameters (static_load > 0 N when stiffness_exponent != 1,
+  cleat_bevel <= cleat_width / 2) make the next evaluation, step or exit
+  from initialization mode fail until they hold.
 """
 
 from pythonfmu import DefaultExperiment
@@ -44,9 +45,10 @@ STATE_FORMAT = "cleatfmu_extended_tire/1"
 #: ``cleatfmu_extended_tire_table`` (read its docstring); the parameters'
 #: starts are ``tire_law.EXTENDED_DEFAULTS``.  The build reads this literal,
 #: without importing this file, to write units, descriptions and the model
-#: structure.  A new variable is appended (as ``parabolic_pressure`` was), so
-#: that the value references of the others never change; the native FMU's
-#: table (``fmu_src/native/extended_tire/config.h``) must list the same rows.
+#: structure.  A new variable is appended (as ``parabolic_pressure`` and
+#: ``cleat_bevel`` were), so that the value references of the others never
+#: change; the native FMU's table (``fmu_src/native/extended_tire/config.h``)
+#: must list the same rows.
 VARIABLES = (
     ("hub_z", "Real", "input", "continuous", "m", "unloaded_radius", {},
      "Hub (wheel centre) height, absolute, m (z upwards); starts at the unloaded radius, "
@@ -74,9 +76,10 @@ VARIABLES = (
     ("cleat_x", "Real", "parameter", "tunable", "m", 0.0, {},
      "Longitudinal position of the built-in cleat's leading edge, m"),
     ("cleat_height", "Real", "parameter", "tunable", "m", 0.0, {},
-     "Height H of the built-in rectangular cleat, m (>= 0; 0: no built-in cleat)"),
+     "Height H of the built-in cleat (rectangular, or a trapezoid when cleat_bevel > 0), m (>= 0; "
+     "0: no built-in cleat)"),
     ("cleat_width", "Real", "parameter", "tunable", "m", 0.1, {},
-     "Width w of the built-in rectangular cleat along the travel, m (> 0)"),
+     "Width w of the built-in cleat along the travel, at its base, m (> 0)"),
     ("unilateral", "Boolean", "parameter", "tunable", "", False, {},
      "Unilateral contact, dimensionless: when true the force is 0 N unless deflection > 0 m and the force "
      "would push (the tire never pulls); when false the law is bilateral"),
@@ -102,20 +105,20 @@ VARIABLES = (
       "cleat_height": "dependent", "cleat_width": "dependent", "unilateral": "dependent",
       "stiffness_exponent": "dependent", "static_load": "dependent", "friction_force": "dependent",
       "friction_velocity": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent",
-      "lug_phase": "dependent", "parabolic_pressure": "dependent"},
+      "lug_phase": "dependent", "parabolic_pressure": "dependent", "cleat_bevel": "dependent"},
      "Vertical tire force on the hub, N, compressive positive (pushes the hub up): elastic force + "
      "damping*deflection_rate + friction; 0 N when unilateral and not in_contact"),
     ("deflection", "Real", "output", "continuous", "m", None,
      {"hub_z": "constant", "road_z": "constant", "hub_x": "dependent", "unloaded_radius": "constant",
       "footprint_length": "dependent", "cleat_x": "dependent", "cleat_height": "dependent",
       "cleat_width": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent", "lug_phase": "dependent",
-      "parabolic_pressure": "dependent"},
+      "parabolic_pressure": "dependent", "cleat_bevel": "dependent"},
      "Tire deflection unloaded_radius - (hub_z - road_effective_z), m (positive = compressed)"),
     ("deflection_rate", "Real", "output", "continuous", "m/s", None,
      {"hub_vz": "constant", "road_vz": "constant", "hub_x": "dependent", "hub_vx": "dependent",
       "footprint_length": "dependent", "cleat_x": "dependent", "cleat_height": "dependent",
       "cleat_width": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent", "lug_phase": "dependent",
-      "parabolic_pressure": "dependent"},
+      "parabolic_pressure": "dependent", "cleat_bevel": "dependent"},
      "Deflection rate road_vz + (slope of cleat and lugs along x)*hub_vx - hub_vz, m/s (positive = compressing)"),
     ("in_contact", "Boolean", "output", "discrete", "", None,
      {"hub_z": "dependent", "hub_vz": "dependent", "road_z": "dependent", "road_vz": "dependent",
@@ -124,18 +127,23 @@ VARIABLES = (
       "cleat_height": "dependent", "cleat_width": "dependent", "unilateral": "dependent",
       "stiffness_exponent": "dependent", "static_load": "dependent", "friction_force": "dependent",
       "friction_velocity": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent",
-      "lug_phase": "dependent", "parabolic_pressure": "dependent"},
+      "lug_phase": "dependent", "parabolic_pressure": "dependent", "cleat_bevel": "dependent"},
      "Contact flag, dimensionless: deflection > 0 m, and when unilateral also force_z > 0 N"),
     ("road_effective_z", "Real", "output", "continuous", "m", None,
      {"road_z": "constant", "hub_x": "dependent", "footprint_length": "dependent", "cleat_x": "dependent",
       "cleat_height": "dependent", "cleat_width": "dependent", "lug_amplitude": "dependent",
-      "lug_pitch": "dependent", "lug_phase": "dependent", "parabolic_pressure": "dependent"},
+      "lug_pitch": "dependent", "lug_phase": "dependent", "parabolic_pressure": "dependent",
+      "cleat_bevel": "dependent"},
      "Effective road height the tire feels, m: road_z + built-in cleat averaged over the footprint + lugs"),
     ("parabolic_pressure", "Boolean", "parameter", "tunable", "", False, {},
      "Parabolic footprint pressure, dimensionless: when true the built-in cleat is averaged over the footprint "
      "weighted by a contact pressure proportional to 1 - (2*xi/footprint_length)^2 (xi: distance from the "
      "footprint's centre), zero at the footprint's ends; when false the pressure is uniform (no effect when "
      "footprint_length = 0 m)"),
+    ("cleat_bevel", "Real", "parameter", "tunable", "m", 0.0, {},
+     "Bevel b of the built-in cleat, m (>= 0; <= cleat_width/2): the cleat rises linearly from 0 m to "
+     "cleat_height over b from its leading edge cleat_x and falls linearly to 0 m over b to its trailing edge "
+     "cleat_x + cleat_width, a trapezoid; 0: a rectangular cleat with vertical edges"),
 )
 
 _VR = {row[0]: vr for vr, row in enumerate(VARIABLES)}
@@ -154,12 +162,14 @@ def _parameters(values):
 def _value_problem(p):
     """Why a parameter of `p` is invalid by itself, or None.
 
-    The checks of ``extended_parameter_problem`` but the constraint between
-    parameters, which cannot trigger with a linear spring (the exponent is
-    checked on its own).
+    The checks of ``extended_parameter_problem`` but the constraints between
+    parameters, which cannot trigger with a linear spring and no bevel (the
+    exponent and the bevel are checked on their own, so that a bevel set
+    before a wider cleat_width is not refused).
     """
-    return (_law.extended_parameter_problem({**p, "stiffness_exponent": 1.0})
-            or _law.value_problem("stiffness_exponent", "-", p["stiffness_exponent"], strictly_positive=True))
+    return (_law.extended_parameter_problem({**p, "stiffness_exponent": 1.0, "cleat_bevel": 0.0})
+            or _law.value_problem("stiffness_exponent", "-", p["stiffness_exponent"], strictly_positive=True)
+            or _law.value_problem("cleat_bevel", "m", p["cleat_bevel"], strictly_positive=False))
 
 
 class CleatfmuExtendedTire(_table.TableSlave):

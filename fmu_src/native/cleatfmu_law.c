@@ -23,14 +23,58 @@ static double clip_unit(double u) {
     return (u < 1.0) ? u : 1.0;
 }
 
+/* The bevelled (trapezoidal) built-in cleat at x: height and slope dr/dx (tire_law.bevel_cleat).
+ * A sum of four ramps max(0, s) with kinks a = xc, xc + b, xc + w - b, xc + w and weights
+ * H / b * (+1, -1, -1, +1), each averaged over the footprint in closed form (point contact,
+ * uniform or parabolic pressure); the same operations in the same order as the Python. */
+static void bevel_cleat(double x, double footprint, double xc, double h, double w, int parabolic, double bevel,
+                        double *height, double *slope) {
+    static const double SIGNS[4] = {1.0, -1.0, -1.0, 1.0};
+    double half = 0.5 * footprint, offsets[4], a, s, u, p;
+    int k;
+    *height = 0.0;
+    *slope = 0.0;
+    if (x - half >= xc + w || x + half < xc) return;
+    offsets[0] = 0.0;
+    offsets[1] = bevel;
+    offsets[2] = w - bevel;
+    offsets[3] = w;
+    for (k = 0; k < 4; k++) {
+        a = xc + offsets[k];
+        s = SIGNS[k] * h / bevel;
+        if (footprint <= 0.0) {
+            if (x >= a) {
+                *height += s * (x - a);
+                *slope += s;
+            }
+        } else if (parabolic) {
+            u = clip_unit((a - x) / half);
+            p = 0.5 - 0.75 * (u - u * u * u / 3.0);
+            *height += s * ((x - a) * p + half * (0.1875 - 0.75 * (0.5 * u * u - 0.25 * u * u * u * u)));
+            *slope += s * p;
+        } else if (a <= x - half) {
+            *height += s * (x - a);
+            *slope += s;
+        } else if (a < x + half) {
+            *height += s * (x + half - a) * (x + half - a) / (2.0 * footprint);
+            *slope += s * (x + half - a) / footprint;
+        }
+    }
+}
+
 /* Built-in cleat seen at x: height and slope dr/dx (tire_law.footprint_cleat); the
- * footprint's contact pressure is uniform, or parabolic when `parabolic` is nonzero. */
+ * footprint's contact pressure is uniform, or parabolic when `parabolic` is nonzero; a
+ * bevel > 0 makes the cleat a trapezoid (bevel_cleat). */
 static void footprint_cleat(double x, double footprint, double xc, double h, double w, int parabolic,
-                            double *height, double *slope) {
+                            double bevel, double *height, double *slope) {
     double lo, hi, left, right, u0, u1;
     *height = 0.0;
     *slope = 0.0;
     if (h == 0.0) return;
+    if (bevel > 0.0) {
+        bevel_cleat(x, footprint, xc, h, w, parabolic, bevel, height, slope);
+        return;
+    }
     if (footprint <= 0.0) {
         *height = (xc <= x && x < xc + w) ? h : 0.0;
         return;
@@ -77,7 +121,7 @@ void cleatfmu_extended_tire(double hub_z, double hub_vz, double hub_x, double hu
     double cleat, cleat_slope, lug, lug_slope, road, d, dd, f;
     int contact;
     footprint_cleat(hub_x, p->footprint_length, p->cleat_x, p->cleat_height, p->cleat_width,
-                    p->parabolic_pressure, &cleat, &cleat_slope);
+                    p->parabolic_pressure, p->cleat_bevel, &cleat, &cleat_slope);
     lug_road(hub_x, p->lug_amplitude, p->lug_pitch, p->lug_phase, &lug, &lug_slope);
     road = road_z + cleat + lug;
     d = p->unloaded_radius - (hub_z - road);

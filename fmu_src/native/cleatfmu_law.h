@@ -27,6 +27,7 @@ typedef struct {
     double lug_pitch;          /* p, m (> 0) */
     double lug_phase;          /* phi, rad */
     int parabolic_pressure;    /* footprint contact pressure parabolic (else uniform) */
+    double cleat_bevel;        /* b, m (0 <= b <= w / 2; 0: rectangular cleat, else a trapezoid) */
 } CleatfmuTireParameters;
 
 /* Outputs of the law. */
@@ -43,9 +44,9 @@ void cleatfmu_point_contact(double hub_z, double hub_vz, double road_z, double r
                             double stiffness, double damping, double unloaded_radius,
                             CleatfmuTireResult *out);
 
-/* Extended tire: built-in cleat averaged over the footprint (uniform or parabolic
- * contact pressure), lugs, progressive stiffness, regularised Coulomb friction,
- * unilateral contact. */
+/* Extended tire: built-in cleat (rectangular, or bevelled: a trapezoid) averaged over
+ * the footprint (uniform or parabolic contact pressure), lugs, progressive stiffness,
+ * regularised Coulomb friction, unilateral contact. */
 void cleatfmu_extended_tire(double hub_z, double hub_vz, double hub_x, double hub_vx,
                             double road_z, double road_vz, const CleatfmuTireParameters *p,
                             CleatfmuTireResult *out);

@@ -64,6 +64,12 @@ int cleatfmu_set_problem(const double *values, char *msg, size_t n) {
     }
 #endif
 #if MODEL_EXTENDED
+    /* the constraints between parameters, in the order of tire_law.extended_parameter_problem */
+    if (values[VR_CLEAT_BEVEL] > 0.5 * values[VR_CLEAT_WIDTH]) {
+        snprintf(msg, n, "cleat_bevel must be <= cleat_width / 2 (%.17g m), got %.17g m",
+                 0.5 * values[VR_CLEAT_WIDTH], values[VR_CLEAT_BEVEL]);
+        return 1;
+    }
     if (values[VR_STIFFNESS_EXPONENT] != 1.0 && !(values[VR_STATIC_LOAD] > 0.0)) {
         snprintf(msg, n, "static_load must be > 0 N when stiffness_exponent != 1");
         return 1;
@@ -158,6 +164,7 @@ int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_
     p.lug_pitch = v[VR_LUG_PITCH];
     p.lug_phase = v[VR_LUG_PHASE];
     p.parabolic_pressure = v[VR_PARABOLIC_PRESSURE] != 0.0;
+    p.cleat_bevel = v[VR_CLEAT_BEVEL];
     cleatfmu_extended_tire(v[VR_HUB_Z], v[VR_HUB_VZ], v[VR_HUB_X], v[VR_HUB_VX], v[VR_ROAD_Z], v[VR_ROAD_VZ],
                            &p, &r);
     v[VR_ROAD_EFFECTIVE_Z] = r.road;

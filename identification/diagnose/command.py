@@ -111,6 +111,38 @@ def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=
     return diag, gain
 
 
+def diagnosis_warnings(diag, gain) -> list[str]:
+    """What the diagnosis itself has to warn of (one sentence each): a cleat profile its footprint models
+    approximate, the sensor signs it settled, a refit at the fitted delay's speed, a baseline whose FMUs
+    could not start.  The conditioning's warnings come
+    before it (:func:`identification.window.focus`)."""
+    from .joint_signs import AS_RECORDED
+
+    out = []
+    profile = diag.problem.rec.cleat_profile
+    if profile is not None and not profile.builtin_exact:
+        out.append(f"a footprint model carries the cleat_profile as the trapezoid of the same height, width and "
+                   f"area (bevel {profile.builtin_bevel_m * 1e3:.3g} mm); the point-contact models ride the "
+                   f"profile itself")
+    signs = diag.extra.get("sign_test")
+    if signs and "chosen" in signs:
+        what = "every sensor as recorded (a pivoting axle or a carried impact)" if signs["chosen"] == AS_RECORDED \
+            else f"{signs['chosen']} reads upside down (sign corrected)"
+        out.append(f"the signs of {'/'.join(signs['open'])} tested in the joint fit: {what}, by a BIC margin of "
+                   f"{signs['margin']:.1f} over the next hypothesis")
+    elif signs:
+        out.append(f"the signs of {'/'.join(signs['open'])} not tested: {signs['skipped']}")
+    refit = diag.extra.get("speed_refit")
+    if refit:
+        out.append(f"the fitted front/rear delay gives {refit['from_delay_m_s'] * 3.6:.3g} km/h, the sidecar "
+                   f"{refit['sidecar_m_s'] * 3.6:.3g} km/h "
+                   f"({100 * (refit['from_delay_m_s'] / refit['sidecar_m_s'] - 1):+.1f} %): fitted again at the "
+                   f"delay's speed")
+    if gain.note:
+        out.append(gain.note)
+    return out
+
+
 def _tractor_text(diag, gain, verbose: bool = False) -> str:
     doc = diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
     body = doc["body"]
@@ -165,10 +197,6 @@ def run(args) -> int:
     from ..window import decimate, focus, is_long, window_json
 
     long = is_long(rec)
-    if rec.cleat_profile is not None:
-        print(f"cleatfmu: warning: {rec.source}: the diagnosis' models ride over a rectangular cleat of the "
-              f"sidecar's height and width; the cleat_profile {json.dumps(rec.cleat_profile.to_json())} is "
-              f"used by simulate only", file=sys.stderr)
     rec = decimate(focus(rec, cutoff_hz=args.cutoff_hz), cutoff_hz=args.cutoff_hz)
     long = long or rec.decimated_from_hz is not None
     keep_fmus = args.fmu is not None or args.fmu_dir is not None
@@ -179,12 +207,8 @@ def run(args) -> int:
                                                workers=args.workers, progress=tick)
         finally:
             bar.close()
-        refit = diag.extra.get("speed_refit")
-        if refit:
-            print(f"cleatfmu: warning: {rec.source}: the fitted front/rear delay gives "
-                  f"{refit['from_delay_m_s'] * 3.6:.3g} km/h, the sidecar {refit['sidecar_m_s'] * 3.6:.3g} km/h "
-                  f"({100 * (refit['from_delay_m_s'] / refit['sidecar_m_s'] - 1):+.1f} %): fitted again at the "
-                  f"delay's speed", file=sys.stderr)
+        for line in diagnosis_warnings(diag, gain):
+            print(f"cleatfmu: warning: {rec.source}: {line}", file=sys.stderr)
         files = {}
         if args.fmu is not None:
             own = next(p for p in gain.fmu_paths if p.stem.endswith(f"_{tire}"))
@@ -199,8 +223,10 @@ def run(args) -> int:
     if args.json:
         doc = diag.tire_json(tire, nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after) if tire else \
             diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
-        if window_json(rec) is not None:
-            doc["analysis_window"] = window_json(rec)
+        if gain.note:
+            doc["nrmse_before_note"] = gain.note
+        if window_json(diag.problem.rec) is not None:    # the conditioning with the signs the fit chose
+            doc["analysis_window"] = window_json(diag.problem.rec)
         print(json.dumps(doc, indent=2))
     else:
         print(_tractor_text(diag, gain, args.verbose))

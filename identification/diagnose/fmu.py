@@ -85,13 +85,14 @@ def cosimulate(model: Model, params: dict, fmu_paths) -> tuple[np.ndarray, float
         res = run_half_tractor_fmus(paths, loads_n=[rec.wheel_load_N[n] for n in names], wheelbase_m=rec.wheelbase_m,
                                     dynamic_index=params["dynamic_index"], speed_m_s=rec.speed_m_s,
                                     cleat_height_m=rec.cleat_height_m, cleat_width_m=rec.cleat_width_m,
-                                    arrival_s=front_arrival, t0_s=t0, duration_s=t_end - t0, max_step_s=pb.step_s)
+                                    arrival_s=front_arrival, t0_s=t0, duration_s=t_end - t0, max_step_s=pb.step_s,
+                                    cleat_profile=rec.cleat_profile)
         index = 0 if pb.front else 1
     else:
         res = run_quarter_tractor(fmu_paths[0], mass_kg=rec.mass_kg(pb.tire), speed_m_s=rec.speed_m_s,
                                   cleat_height_m=rec.cleat_height_m, cleat_width_m=rec.cleat_width_m,
                                   arrival_s=params["arrival"], t0_s=t0, duration_s=t_end - t0,
-                                  max_step_s=pb.step_s)
+                                  max_step_s=pb.step_s, cleat_profile=rec.cleat_profile)
         index = 0
     wall = time.perf_counter() - wall
     fs = rec.sample_rate_hz

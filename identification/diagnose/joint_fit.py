@@ -195,7 +195,6 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
         change = np.concatenate([(fine[c] - pred[c])[w] for c in pb.channels]) / scale
         shift = -np.linalg.lstsq(jac, change, rcond=None)[0]
     dof = max(1, fun.size - len(free))
-    s2 = float(fun @ fun) / dof
     infl = float(np.mean([long_run_variance_ratio(parts[c]) for c in pb.channels]))
     sizes = [int(w.sum())] * len(pb.channels)
     lag = correlation_lag(pb.rec.sample_rate_hz, pb.cutoff_hz)

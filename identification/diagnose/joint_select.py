@@ -28,6 +28,7 @@ from .joint_evidence import check_tractor
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
 from .joint_start import (ENVELOPE_GUESS_M, body_start, enveloped_timings, refine_timing, rescue_start,
                           starting_values)
+from .joint_signs import settle_signs
 from .joint_timing import BODY_DEFAULTS
 from .select import periodic_start
 from .tractor import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, parameter_unit
@@ -123,7 +124,6 @@ class TractorDiagnosis:
                 return None
             return {"value": float(fin.params[name]), "ci": [float(v) for v in fin.ci[name]]}
 
-        delay = fin.params.get("delay")
         tires = {}
         for t in self.channels:
             tires[t] = {"k": float(fin.params[f"k_{t}"]), "c": float(fin.params[f"c_{t}"]),
@@ -137,6 +137,7 @@ class TractorDiagnosis:
                          "pivot_index": value("pivot_index"),
                          "speed_m_s": self.speed_json()},
                 "tires": tires, "evidence": dict(self.evidence),
+                **({"sign_test": self.extra["sign_test"]} if self.extra.get("sign_test") else {}),
                 "acquisition": rec.acquisition.to_json() if rec.acquisition is not None else None,
                 "intervals": "conditional on the model: it leaves a residual above the noise floor"
                              if self.conditional else "the model explains the data to within noise"}
@@ -239,6 +240,10 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     (:func:`~identification.diagnose.joint_start.rescue_start`), and the run
     with the lower BIC is kept (``extra["rescue"]`` says which).
 
+    Sensor signs the conditioning left open (a front channel read upside down or a pivoting axle; no
+    quiet stretch before an impact) are settled by diagnosing each hypothesis and keeping the one of
+    the lowest BIC (:func:`~identification.diagnose.joint_signs.settle_signs`, ``extra["sign_test"]``).
+
     When the fitted front/rear delay implies a speed more than :data:`SPEED_REFIT` off the sidecar's
     (a GPS speed a few percent off), the diagnosis is fitted again at the delay's speed
     (``extra["speed_refit"]`` says so; :meth:`TractorDiagnosis.speed_json` reports both speeds).
@@ -264,7 +269,9 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
 
     t0 = time.perf_counter()
     rec = focus(rec, cutoff_hz=cutoff_hz, announce=False)   # itself when the caller focused it
-    diag = _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels)
+    diag = settle_signs(rec, lambda r: _diagnose_once(r, cutoff_hz, effects, progress, workers, channels),
+                        progress)
+    rec = diag.problem.rec                                   # with the signs the joint fit chose
     delay = diag.final.params.get("delay")
     if delay and abs(rec.wheelbase_m / delay / rec.speed_m_s - 1) > SPEED_REFIT:
         # the fitted front/rear delay says the sidecar's speed is off: the cleat's crossing time and the
@@ -273,6 +280,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
         first = diag
         diag = _diagnose_once(replace(rec, speed_m_s=rec.wheelbase_m / delay), cutoff_hz, effects, progress,
                               workers, channels)
+        diag.extra["sign_test"] = first.extra.get("sign_test")
         diag.extra["speed_refit"] = {"sidecar_m_s": float(rec.speed_m_s),
                                      "from_delay_m_s": float(rec.wheelbase_m / delay),
                                      "first_effects": list(first.effects)}

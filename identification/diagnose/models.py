@@ -140,7 +140,8 @@ def tire_law_parameters(rec: Recording, tire: str, effects, *, k: float, c: floa
              unilateral="lift_off" in effects)
     if "enveloping" in effects:
         p.update(footprint_length=footprint, parabolic_pressure=True, cleat_x=0.0, cleat_height=rec.cleat_height_m,
-                 cleat_width=rec.cleat_width_m)
+                 cleat_width=rec.cleat_width_m,
+                 cleat_bevel=0.0 if rec.cleat_profile is None else rec.cleat_profile.builtin_bevel_m)
     if "nonlinear_stiffness" in effects:
         p.update(stiffness_exponent=exponent)
     if "friction_damping" in effects:
@@ -215,7 +216,7 @@ class Model:
                                      cleat_time_s=w / v, max_step_s=step_s or pb.step_s)
             inputs = tire_inputs(n, start, h, arrival_s=theta["arrival"], speed_m_s=v,
                                  cleat_height_m=rec.cleat_height_m, cleat_width_m=w,
-                                 external_cleat=p["cleat_height"] == 0.0)
+                                 external_cleat=p["cleat_height"] == 0.0, profile=rec.cleat_profile)
             offset = (0.0, 0.0)
             if p["lug_amplitude"]:
                 offset = lug_steady_state(masses_kg=[rec.mass_kg(pb.tire)], stiffness_n_m=[p["stiffness"]],
@@ -235,7 +236,7 @@ class Model:
                                  max_step_s=step_s or pb.step_s, other_axle_delay_s=delay)
         arrivals = (front_arrival, front_arrival + delay)
         inputs = [tire_inputs(n, start, h, arrival_s=arr, speed_m_s=v, cleat_height_m=rec.cleat_height_m,
-                              cleat_width_m=w, external_cleat=p["cleat_height"] == 0.0)
+                              cleat_width_m=w, external_cleat=p["cleat_height"] == 0.0, profile=rec.cleat_profile)
                   for arr, p in zip(arrivals, laws)]
         loads = [rec.wheel_load_N[nm] for nm in names]
         offset = ((0.0, 0.0), (0.0, 0.0))

@@ -34,7 +34,7 @@ from ..model.kernels import run_model
 from ..model.sensing import sensed_lowpassed, sensed_lowpassed_reference
 from ..preprocess import DEFAULT_CUTOFF_HZ, noise_rms, preprocess
 from ..recording import FRONT_TIRES, TIRES, Recording
-from .models import _UNLOADED_RADIUS_M as UNLOADED_RADIUS_M, tire_law_parameters
+from .models import tire_law_parameters
 
 __all__ = ["EFFECTS", "TIRE_EFFECTS", "BODY_EFFECTS", "TractorProblem", "TractorFitModel", "parameter_unit"]
 
@@ -228,7 +228,7 @@ class TractorFitModel:
         rec = self.problem.rec
         arrivals = self.arrivals(theta)
         return TractorModel(body=self.body(theta), laws=tuple(self.law(theta, t) for t in self.problem.channels),
-                            cleat=Cleat(rec.cleat_height_m, rec.cleat_width_m, rec.speed_m_s),
+                            cleat=Cleat.of(rec),
                             arrivals_s=tuple(arrivals[t] for t in self.problem.channels))
 
     @property

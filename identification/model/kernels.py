@@ -9,6 +9,8 @@ seconds, cached on disk afterwards).
 
 from __future__ import annotations
 
+import types
+
 import numpy as np
 
 from .. import tire_law
@@ -18,9 +20,20 @@ from .tractor import TractorModel
 
 __all__ = ["run_model", "available"]
 
+def _compiled(fn, helpers: dict):
+    """`fn` compiled by numba, its calls to the module-level `helpers` (name: compiled function) resolved to
+    them: the law's plain-Python functions are compiled as they stand, with no numba in :mod:`tire_law`."""
+    env = dict(fn.__globals__, **helpers)
+    return numba.njit(cache=True, fastmath=False)(
+        types.FunctionType(fn.__code__, env, fn.__name__, fn.__defaults__))
+
+
 try:   # pragma: no cover - numba is a dependency; the fallback keeps the package importable without it
     import numba
-    _force = numba.njit(cache=True, fastmath=False)(tire_law.tire_force)
+    _bevel = _compiled(tire_law.bevel_cleat, {})
+    _footprint = _compiled(tire_law.footprint_cleat, {"bevel_cleat": _bevel})
+    _lug = _compiled(tire_law.lug_road, {})
+    _force = _compiled(tire_law.tire_force, {"footprint_cleat": _footprint, "lug_road": _lug})
 except ImportError:   # pragma: no cover
     numba = None
 

@@ -201,11 +201,18 @@ _matrices = functools.lru_cache(maxsize=64)(Body._matrices)
 
 @dataclass(frozen=True)
 class Cleat:
-    """The cleat: height and width (m) in the driving direction, crossed at `speed_m_s`."""
+    """The cleat: height and width (m) in the driving direction, crossed at `speed_m_s`, and its cross-section
+    (:class:`identification.cleat.CleatProfile`; None: rectangular)."""
 
     height_m: float
     width_m: float
     speed_m_s: float
+    profile: object = None
+
+    @classmethod
+    def of(cls, rec) -> "Cleat":
+        """The cleat of recording `rec`, crossed at its speed."""
+        return cls(rec.cleat_height_m, rec.cleat_width_m, float(rec.speed_m_s), rec.cleat_profile)
 
     @property
     def duration_s(self) -> float:
@@ -259,8 +266,12 @@ def cleat_inputs(start_s: float, step_s: float, n: int, *, arrival_s: float, cle
 
 
 def _cleat_road(road, rate, t, start_s: float, step_s: float, *, arrival_s: float, cleat: Cleat) -> list:
-    """Write the rectangular cleat into one tire's zeroed road height and rate rows; its edges [(index, time)]."""
+    """Write the cleat into one tire's zeroed road height and rate rows; its edges [(index, time)]."""
     n = road.size
+    if cleat.profile is not None and not cleat.profile.is_rectangular:
+        road[:], rate[:], edges = cleat.profile.on_grid(t, arrival_s=arrival_s, speed_m_s=cleat.speed_m_s,
+                                                        step_s=step_s)
+        return edges
     edges = []
     H = cleat.height_m
     if H:
@@ -344,7 +355,7 @@ class TractorModel:
         out = []
         for p, x0 in zip(self.laws, hub_x0):
             cleat, _ = tire_law.footprint_cleat(x0, p["footprint_length"], p["cleat_x"], p["cleat_height"],
-                                                p["cleat_width"], p["parabolic_pressure"])
+                                                p["cleat_width"], p["parabolic_pressure"], p["cleat_bevel"])
             lug, _ = tire_law.lug_road(x0, p["lug_amplitude"], p["lug_pitch"], p["lug_phase"])
             deflection = p["stiffness_exponent"] * p["static_load"] / p["stiffness"]
             out.append(p["unloaded_radius"] + cleat + lug - deflection)
