@@ -348,3 +348,21 @@ def assert_instantiate_free_cycles_leak_at_most_1_mb_and_keep_sys_path(fmu, unzi
     growth = rss_growth(cycle, warmup=0, collect_every=100)
     assert sys.path == path_before
     assert growth <= LEAK_LIMIT, f"RSS grew by {growth / 1024:.0f} kB over 1000 instantiate/free cycles"
+
+
+def assert_runs_match_the_law(runs: dict, signals, outputs, law: dict, closed: dict, kind) -> None:
+    """Each FMU run of `runs` ({label: (fmu, start values or None)}) stepped by fmpy over `signals` gives
+    the Python law's outputs `law` (bit for bit in a pythonfmu FMU, which runs the very law code; to
+    1e-12 in a native one) and the independent closed form's `closed` (to the kind's reference tolerance)."""
+    for label, (fmu, start_values) in runs.items():
+        sim = simulate_fmpy(fmu, signals, outputs, start_values=start_values)
+        for name in outputs:
+            if name == "in_contact":
+                assert np.array_equal(sim[name], law[name]) and np.array_equal(sim[name], closed[name]), label
+                continue
+            if label.startswith("pythonfmu"):
+                assert np.array_equal(sim[name], law[name]), (label, name)
+            else:
+                np.testing.assert_allclose(sim[name], law[name], rtol=1e-12, atol=0.0, err_msg=f"{label}: {name}")
+            np.testing.assert_allclose(sim[name], closed[name], rtol=kind.reference_rtol, atol=kind.reference_atol,
+                                       err_msg=f"{label}: {name} (closed form)")

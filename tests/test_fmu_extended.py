@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from extended_tire_cases import (BOOL_PARAMS, INPUTS, KIND, OPTION_SETS, OUTPUTS, REAL_OUTPUTS, REAL_PARAMS,
                                  law_outputs, random_inputs, random_parameters, read_outputs, set_parameters)
-from fmu_helpers import initial_unknowns, kind_fixtures, model_description, output_dependencies
+from fmu_helpers import (assert_runs_match_the_law, initial_unknowns, kind_fixtures, model_description,
+                         output_dependencies)
 
 import identification.tire_law as law
 from build_scripts import build_fmu, load_kind
@@ -259,8 +260,6 @@ def test_bevelled_cleat_stepped_in_fmpy_gives_the_independent_closed_form_in_bot
     pythonfmu FMU (built with the bevel, or switched to it before initialization) and the native FMU give
     the Python law's outputs for the inputs held over each step, and build_scripts/reference.py's
     independent closed form of the trapezoid's footprint average."""
-    from build_scripts.runners import simulate_fmpy
-
     kind = load_kind(KIND)
     starts = {**kind.reference_start_values, "cleat_bevel": 0.03, **BEVEL_RUNS[run]}
     p = {**law.EXTENDED_DEFAULTS, **starts}
@@ -283,18 +282,7 @@ def test_bevelled_cleat_stepped_in_fmpy_gives_the_independent_closed_form_in_bot
             "pythonfmu switched before initialization": (fmu, starts),
             "native built with the bevel": (build_fmu(KIND, tmp_path / "native.fmu", backend="native",
                                                       start_values=starts, platforms=["linux64"]), None)}
-    for label, (path, start_values) in runs.items():
-        sim = simulate_fmpy(path, signals, OUTPUTS, start_values=start_values)
-        for name in OUTPUTS:
-            if name == "in_contact":
-                assert np.array_equal(sim[name], expected[name]) and np.array_equal(sim[name], closed[name]), label
-                continue
-            if label.startswith("pythonfmu"):  # the very same law code
-                assert np.array_equal(sim[name], expected[name]), (label, name)
-            else:
-                np.testing.assert_allclose(sim[name], expected[name], rtol=1e-12, atol=0.0, err_msg=f"{label}: {name}")
-            np.testing.assert_allclose(sim[name], closed[name], rtol=kind.reference_rtol, atol=kind.reference_atol,
-                                       err_msg=f"{label}: {name} (closed form)")
+    assert_runs_match_the_law(runs, signals, OUTPUTS, expected, closed, kind)
 
 
 def test_a_bevel_beyond_half_the_cleat_width_is_refused_naming_cleat_bevel(slave, vr, tmp_path):

@@ -7,7 +7,7 @@ import zipfile
 
 import numpy as np
 import pytest
-from fmu_helpers import assert_fmpy_matches_the_reference, assert_libcosim_matches_fmpy
+from fmu_helpers import assert_fmpy_matches_the_reference, assert_libcosim_matches_fmpy, assert_runs_match_the_law
 from native_fixtures import AWKWARD_DIR, assert_step_response, c_host, extract, guid, native_fmus, run_host  # noqa: F401,E501
 
 from build_scripts import build_fmu, load_kind
@@ -131,7 +131,6 @@ def test_parabolic_footprint_step_run_reproduces_the_python_law_in_both_backends
     native FMU (built with the option, or switched to it before initialization) and the pythonfmu FMU give
     the Python law's outputs for the inputs held over each step, and the independent closed form's."""
     from build_scripts.reference import closed_form_outputs
-    from build_scripts.runners import simulate_fmpy
 
     kind = load_kind("extended_tire")
     inputs, outputs = kind.names("input"), kind.names("output")
@@ -153,18 +152,7 @@ def test_parabolic_footprint_step_run_reproduces_the_python_law_in_both_backends
             "native switched before initialization": (native_fmus["extended_tire"], starts),
             "pythonfmu built with the option": (build_fmu("extended_tire", tmp_path / "py.fmu", start_values=starts),
                                                 None)}
-    for label, (fmu, start_values) in runs.items():
-        sim = simulate_fmpy(fmu, signals, outputs, start_values=start_values)
-        for name in outputs:
-            if name == "in_contact":
-                assert np.array_equal(sim[name], law[name]) and np.array_equal(sim[name], closed[name]), label
-                continue
-            if label.startswith("pythonfmu"):  # the very same law code
-                assert np.array_equal(sim[name], law[name]), (label, name)
-            else:
-                np.testing.assert_allclose(sim[name], law[name], rtol=1e-12, atol=0.0, err_msg=f"{label}: {name}")
-            np.testing.assert_allclose(sim[name], closed[name], rtol=kind.reference_rtol, atol=kind.reference_atol,
-                                       err_msg=f"{label}: {name} (closed form)")
+    assert_runs_match_the_law(runs, signals, outputs, law, closed, kind)
 
 
 def test_c_point_contact_agrees_with_the_python_law(native_fmus):

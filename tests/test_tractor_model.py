@@ -82,13 +82,13 @@ def _geometry(pivot):
     return np.column_stack(cols), np.diag(inertia)
 
 
-def _control_mean_acceleration(pivot, times, ts):
-    """Mean hub accelerations over each sample interval from python-control (road-rate impulses at the edges)."""
+def _state_space(pivot):
+    """python-control's linear tractor: states (q, q', r1..r4), inputs the road rates, outputs the hub
+    velocities J q'."""
     J, Mm = _geometry(pivot)
     nq = J.shape[1]
     k, c = np.diag(K), np.diag(C)
     Minv = np.linalg.inv(Mm)
-    # states (q, q', r1..r4), inputs the road rates
     A = np.zeros((2 * nq + 4, 2 * nq + 4))
     A[:nq, nq:2 * nq] = np.eye(nq)
     A[nq:2 * nq, :nq] = -Minv @ J.T @ k @ J
@@ -97,8 +97,12 @@ def _control_mean_acceleration(pivot, times, ts):
     B = np.zeros((2 * nq + 4, 4))
     B[nq:2 * nq, :] = Minv @ J.T @ c
     B[2 * nq:, :] = np.eye(4)
-    Cout = np.hstack([np.zeros((4, nq)), J, np.zeros((4, 4))])
-    sys = control.ss(A, B, Cout, np.zeros((4, 4)))
+    return control.ss(A, B, np.hstack([np.zeros((4, nq)), J, np.zeros((4, 4))]), np.zeros((4, 4)))
+
+
+def _control_mean_acceleration(pivot, times, ts):
+    """Mean hub accelerations over each sample interval from python-control (road-rate impulses at the edges)."""
+    sys = _state_space(pivot)
     dt = 2e-5
     grid = np.arange(0.0, times[-1] + 0.5, dt)
     resp = control.impulse_response(sys, grid)
@@ -134,19 +138,6 @@ def _control_bevelled_mean_acceleration(times, ts):
     """Mean hub accelerations over each sample interval from python-control's forced response of the rigid
     tractor (pitch, roll) to the bevelled cleat's road rates: +H/b v while a contact point climbs the leading
     bevel, -H/b v on the trailing one, on a 10 us grid."""
-    J, Mm = _geometry(False)
-    nq = J.shape[1]
-    k, c = np.diag(K), np.diag(C)
-    Minv = np.linalg.inv(Mm)
-    A = np.zeros((2 * nq + 4, 2 * nq + 4))
-    A[:nq, nq:2 * nq] = np.eye(nq)
-    A[nq:2 * nq, :nq] = -Minv @ J.T @ k @ J
-    A[nq:2 * nq, nq:2 * nq] = -Minv @ J.T @ c @ J
-    A[nq:2 * nq, 2 * nq:] = Minv @ J.T @ k
-    B = np.zeros((2 * nq + 4, 4))
-    B[nq:2 * nq, :] = Minv @ J.T @ c
-    B[2 * nq:, :] = np.eye(4)
-    Cout = np.hstack([np.zeros((4, nq)), J, np.zeros((4, 4))])      # hub velocities
     dt = 1e-5
     grid = np.arange(0.0, times[-1] + 0.01, dt)
     rates = np.zeros((4, grid.size))
@@ -155,7 +146,7 @@ def _control_bevelled_mean_acceleration(times, ts):
         s = V * (mid - t_arr)
         rates[i] = np.where((s >= 0) & (s < BEVEL), H / BEVEL * V, 0.0) \
             - np.where((s >= W - BEVEL) & (s < W), H / BEVEL * V, 0.0)
-    sysd = control.c2d(control.ss(A, B, Cout, np.zeros((4, 4))), dt, method="zoh")
+    sysd = control.c2d(_state_space(False), dt, method="zoh")
     vel = np.asarray(control.forced_response(sysd, grid, rates).outputs)
     return np.array([(np.interp(times + ts / 2, grid, v) - np.interp(times - ts / 2, grid, v)) / ts for v in vel])
 
