@@ -458,8 +458,12 @@ def tire_force(hub_z, hub_vz, hub_x, hub_vx, road_z, road_vz, q):
     fp, xc, hc, wc = q[3], q[4], q[5], q[6]
     n, w_load, fc, vf = q[8], q[9], q[10], q[11]
     la, lp, lph = q[12], q[13], q[14]
-    cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc, q[15] != 0.0, q[16])
-    lug, lug_slope = lug_road(hub_x, la, lp, lph)
+    cleat, cleat_slope = 0.0, 0.0
+    if hc != 0.0:
+        cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc, q[15] != 0.0, q[16])
+    lug, lug_slope = 0.0, 0.0
+    if la != 0.0:
+        lug, lug_slope = lug_road(hub_x, la, lp, lph)
     road = road_z + cleat + lug
     d = r0 - (hub_z - road)
     dd = road_vz + (cleat_slope + lug_slope) * hub_vx - hub_vz
