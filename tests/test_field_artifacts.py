@@ -192,3 +192,47 @@ def test_a_front_flip_beside_the_other_front_impact_is_settled_by_the_joint_fit(
         assert diag.final.params[f"k_{t}"] == pytest.approx(run.truth["tires"][t]["k"], rel=0.03), t
         assert diag.final.params[f"c_{t}"] == pytest.approx(run.truth["tires"][t]["c"], rel=0.10), t
 
+
+
+@pytest.mark.parametrize("overrides, seed, effects", [
+    # a 29 mm bevel at 10 km/h: the tire leaves the ground for a few ms only, yet that explains most of it
+    ({"speed_kmh": 10.0, "cleat.stagger_m": 0.0185, "cleat.bevel_m": 0.029}, 0,
+     ("enveloping", "lift_off", "nonlinear_stiffness", "friction_damping")),
+    # 7 km/h, 33 mm stagger: a roll candidate at the decoupling index escapes the lift-off fit's local minimum
+    ({"speed_kmh": 7.0, "cleat.stagger_m": 0.033231}, 2, ("lift_off", "axle_coupling", "roll_coupling")),
+])
+def test_lift_off_is_named_alone_however_brief_and_never_with_a_roll_that_decouples(overrides, seed, effects):
+    """Lift-off in the rig is named lift_off and nothing else: a brief loss of contact (under the 15 ms of
+    free fall the gate otherwise asks for) when the unilateral tire removes most of its channel's residual;
+    and no roll_coupling from a fit whose roll index decouples left from right (1 - ybar^2)."""
+    import re
+
+    from identification.diagnose.joint_select import diagnose_tractor
+
+    run = run_rig(("lift_off",), overrides, seed=seed)
+    diag = diagnose_tractor(run.recording, effects=effects)
+    assert diag.effects == ["lift_off"], (diag.effects, diag.evidence)
+    if "cleat.bevel_m" in overrides:
+        lost_ms = int(re.search(r"for (\d+) ms", diag.evidence["lift_off"]).group(1))
+        assert lost_ms < 15, diag.evidence["lift_off"]
+    for tire in diag.channels:
+        assert diag.final.params[f"k_{tire}"] == pytest.approx(run.truth["tires"][tire]["k"], rel=0.03), tire
+        assert diag.final.params[f"c_{tire}"] == pytest.approx(run.truth["tires"][tire]["c"], rel=0.10), tire
+
+
+def test_the_decoupling_roll_index_makes_an_axle_pair_two_independent_corners():
+    """At the roll index 1 - ybar^2 the axle pair's inverse mass matrix (J M^-1 J^T) is that of two
+    independent corners of mass W/g each; 0.05 off it, the wheels are coupled."""
+    from identification.diagnose.joint_evidence import _decoupled_roll_indices
+    from identification.model import Body
+    from identification.recording import STANDARD_GRAVITY
+
+    loads = (21000.0, 17500.0, 30000.0, 26000.0)     # FL, FR, RL, RR: unequal left and right
+    r_front, r_rear = _decoupled_roll_indices([loads[:2], loads[2:]])
+    for r0, pair in ((r_front, slice(0, 2)), (r_rear, slice(2, 4))):
+        J, masses, _ = Body(("FL", "FR", "RL", "RR"), loads, 2.5, roll=True, roll_index=r0).matrices()
+        mobility = (J / masses) @ J.T
+        np.testing.assert_allclose(mobility[pair, pair], np.diag(STANDARD_GRAVITY / np.array(loads[pair])),
+                                   rtol=1e-12, atol=1e-15)
+        J, masses, _ = Body(("FL", "FR", "RL", "RR"), loads, 2.5, roll=True, roll_index=r0 - 0.05).matrices()
+        assert abs(((J / masses) @ J.T)[pair, pair][0, 1]) > 1e-6

@@ -2,14 +2,19 @@
 
 ``enveloping``          every fitted footprint ≥ 0.1 m, its interval above 0.05 m;
 ``lift_off``            the fitted model loses contact ≥ 15 ms on some tire, and the measured hub there
-                        is near free fall (mean within 0.35 g of −1 g) - or, on a coupled body (the other
-                        tires carry the hub), the model explains ≥ 50 % of the residual over that span;
+                        is near free fall (mean within 0.35 g of −1 g); a briefer loss (≥ 2 samples: a steep
+                        bevel, a fast pass) counts when the hub falls freely and the unilateral tire removes
+                        ≥ 50 % of its own channel's residual - or, on a coupled body (the other tires carry
+                        the hub), the model explains ≥ 50 % of the residual over a loss of ≥ 15 ms;
 ``axle_coupling``       the other axle's impact shows in a channel (the extended model's residual there
                         ≥ 5× the noise), and the pitch index differs from 1 by ≥ 0.05, its interval excluding 1
                         (with ``roll_coupling``, the rigid body: the body explains ≥ 50 % of that cross-talk,
                         which at a pitch index of 1 travels through the shared roll alone);
 ``roll_coupling``       the other side's impact shows in a channel (≥ 5× the noise) and the roll index is
-                        identified (interval within a factor 3);
+                        identified (interval within a factor 3); without ``axle_coupling`` (axle pairs) it
+                        also differs by ≥ 0.05 from each axle's decoupling index 1 − ybar² (ybar the pair's
+                        left/right load offset), its interval excluding it: at that index the pair is two
+                        independent corners, and a gain there is a better fit of the current model;
 ``front_axle_pivot``    the front-axle roll index is identified (interval within a factor 10) and the front
                         channels' residual falls by ≥ 25 %;
 ``nonlinear_stiffness`` the exponent differs from 1 by ≥ 0.08, its interval excluding 1;
@@ -113,7 +118,14 @@ def _lift_off(fit, base):
     text = (f"{tire} hub at {mean_g:.2f} g for {(b - a) * 1e3:.0f} ms from t = {a:.3f} s "
             f"(contact lost {sum(map(len, losses.values()))}x, {total * 1e3:.0f} ms in all)")
     if not set(fit.model.effects) & {"axle_coupling", "roll_coupling"}:
-        return (b - a) >= 0.015 and abs(mean_g + 1.0) <= 0.35, text
+        falls = abs(mean_g + 1.0) <= 0.35
+        if (b - a) >= LIFT_OFF_S:
+            return falls, text
+        # a brief loss (a steep bevel, a fast pass): the hub falls freely for a few samples only, and the
+        # unilateral tire must then account for most of what that wheel's channel left unexplained
+        share = 1.0 - fit.sse[tire] / max(base.sse[tire], 1e-12)
+        text += f"; the unilateral tire explains {max(share, 0.0):.0%} of {tire}'s residual"
+        return (b - a) * pb.rec.sample_rate_hz >= 2 and falls and share >= BRIEF_LIFT_OFF_SHARE, text
     # on a coupled body the other tires carry the hub that lost contact: no free fall, but the unilateral
     # model must explain what the hub does while its tire is off the ground
     span = (t >= a) & (t <= b) & pb.window
@@ -122,7 +134,14 @@ def _lift_off(fit, base):
     explained = 1.0 - float(rf @ rf) / max(float(rb @ rb), 1e-12) if span.any() else 0.0
     text += (f"; the body carries the hub meanwhile (not free fall), and the unilateral tires explain "
              f"{max(explained, 0.0):.0%} of the residual there")
-    return (b - a) >= 0.015 and explained >= 0.5, text
+    return (b - a) >= LIFT_OFF_S and explained >= 0.5, text
+
+
+#: Contact lost at least this long (s) is evidence of lift-off with the hub in free fall alone.
+LIFT_OFF_S = 0.015
+#: A briefer loss (two samples or more) counts when the unilateral tire removes at least this share of
+#: its own channel's residual.
+BRIEF_LIFT_OFF_SHARE = 0.5
 
 
 def _axle(fit, base):
@@ -151,10 +170,31 @@ def _roll(fit, base):
         return False, "no channel on the other side of the same axle"
     obs, src, ratio, peak, explained, at = best
     stagger = fit.params.get("stagger", 0.0)
-    return ratio >= 5.0 and hi / max(lo, 1e-12) <= 3.0, (
+    ok = ratio >= 5.0 and hi / max(lo, 1e-12) <= 3.0
+    decoupled = ""
+    if "axle_coupling" not in fit.model.effects:
+        # axle pairs: the roll index 1 - ybar^2 of an axle (ybar its left/right load offset) decouples its
+        # wheels, and a fit there is the independent corners again, however much it gains
+        free = _decoupled_roll_indices(_axle_loads(fit))
+        ri = fit.params["roll_index"]
+        ok = ok and all(abs(ri - r0) >= 0.05 and not lo <= r0 <= hi for r0 in free)
+        decoupled = f" (left and right decoupled at {', '.join(f'{r0:.3f}' for r0 in free)})"
+    return ok, (
         f"the right wheels meet the cleat {stagger * 1e3:+.0f} ms after the left ones; {src}'s impact at "
         f"t = {at:.3f} s shows in {obs}: {peak:.2f} m/s^2 peak ({ratio:.0f}x the noise RMS), "
-        f"{max(explained, 0):.0%} of it explained through roll, roll index {_ci(fit, 'roll_index', '.3f')}")
+        f"{max(explained, 0):.0%} of it explained through roll, roll index {_ci(fit, 'roll_index', '.3f')}{decoupled}")
+
+
+def _axle_loads(fit: TractorFit) -> list:
+    """(left, right) wheel loads, N, of each axle recorded on both sides."""
+    pb = fit.model.problem
+    loads = pb.rec.wheel_load_N
+    return [(loads[l], loads[r]) for l, r in (("FL", "FR"), ("RL", "RR")) if l in pb.channels and r in pb.channels]
+
+
+def _decoupled_roll_indices(pairs) -> list:
+    """The roll index that decouples each axle pair's wheels, 1 - ybar^2 (ybar = (W_l - W_r) / (W_l + W_r))."""
+    return [1.0 - ((wl - wr) / (wl + wr)) ** 2 for wl, wr in pairs]
 
 
 def _pivot(fit, base):
