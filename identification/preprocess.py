@@ -45,8 +45,10 @@ FILTER_ORDER = 5
 _RISE_FRACTION = 0.3
 #: The onset is where the signal first left this fraction of the burst maximum.
 _ONSET_FRACTION = 0.05
-#: An impact must stand this many noise RMS above the noise.
+#: An impact must stand this many noise RMS above the noise, or this many times the largest value of the
+#: stretch before it (a steady vibration - an engine line, the lugs - raises the RMS, not the transient).
 _MIN_SNR = 10.0
+_MIN_STEADY_RATIO = 3.0
 #: Peaks smaller than this many noise RMS (or 1 % of the impact) are not used.
 _PEAK_SNR = 5.0
 _PEAK_FRACTION = 0.01
@@ -253,17 +255,19 @@ def _parabolic_peak(y: np.ndarray, i: int, half_width: int) -> tuple[float, floa
 
 
 def _onset(absx: np.ndarray, start: int, stop: int, floor: float, source, tire: str,
-           background: float = 0.0) -> tuple[int, float]:
+           background: float = 0.0, steady: float = 0.0) -> tuple[int, float]:
     """First rise of |x| in [start, stop) to 30 % of its maximum, walked back to the onset.
 
     `background` is the level of what was already ringing before `start`; the
-    rise must also exceed 1.5 times it.
+    rise must also exceed 1.5 times it.  The impact must stand _MIN_SNR times
+    the noise `floor` or _MIN_STEADY_RATIO times `steady`, the largest |x| of
+    the stretch the floor was measured on.
     """
     seg = absx[start:stop]
     if seg.size == 0:
         raise InputError(source, f"channel {tire}: record ends before the expected impact")
     peak = float(seg.max())
-    if peak <= 0 or peak < _MIN_SNR * floor:
+    if peak <= 0 or (peak < _MIN_SNR * floor and not (steady > 0 and peak >= _MIN_STEADY_RATIO * steady)):
         raise InputError(source, f"channel {tire}: no detectable cleat impact "
                                  f"(largest filtered value {peak:.3g} m/s^2, noise {floor:.3g} m/s^2)")
     rise = start + int(np.argmax(seg >= min(peak, max(_RISE_FRACTION * peak, 1.5 * background))))
@@ -329,6 +333,10 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
             return noise_rms(filt[name][:n])
         return raw_noise(name)
 
+    def steady_before(name, t_end):   # the largest |x| where noise_before measured, 0 without that stretch
+        n = int(np.searchsorted(t, t_end - 0.05))
+        return float(np.max(np.abs(filt[name][:n]))) if n * dt >= 0.1 else 0.0
+
     # Front-axle impact: earliest onset among the front channels present.
     fronts = [n for n in FRONT_TIRES if n in rec.accel_m_s2]
     onsets: dict[str, int] = {}
@@ -338,7 +346,8 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
         try:
             i, _ = _onset(absx, 0, absx.size, 0.0, src, name)
             noise[name] = noise_before(name, t[i])
-            onsets[name], _ = _onset(absx, 0, absx.size, noise[name], src, name)
+            onsets[name], _ = _onset(absx, 0, absx.size, noise[name], src, name,
+                                     steady=steady_before(name, t[i]))
         except InputError:
             if name in tires:
                 raise  # a channel not asked for only serves the timing
@@ -346,7 +355,7 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
     delay = rec.rear_axle_delay_s()
     for name in (n for n in REAR_TIRES if n in rec.accel_m_s2 and n in tires):
         absx = np.abs(filt[name])
-        background = 0.0
+        background, quiet_end = 0.0, t_front
         if t_front is not None:
             start = int(np.searchsorted(t, t_front + delay - _REAR_TOLERANCE_S))
             if start >= t.size - 1:
@@ -358,8 +367,10 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
         else:
             start = 0
             i, _ = _onset(absx, 0, absx.size, 0.0, src, name)
-            noise[name] = noise_before(name, t[i])
-        onsets[name], _ = _onset(absx, start, absx.size, noise[name], src, name, background)
+            quiet_end = t[i]
+            noise[name] = noise_before(name, quiet_end)
+        onsets[name], _ = _onset(absx, start, absx.size, noise[name], src, name, background,
+                                 steady_before(name, quiet_end))
 
     out = {}
     for name in tires:

@@ -20,7 +20,8 @@
 ``nonlinear_stiffness`` the exponent differs from 1 by ≥ 0.08, its interval excluding 1;
 ``friction_damping``    a friction force ≥ 30 N, its interval excluding 0;
 ``periodic_disturbance`` a spectral line at a fitted frequency in the residual ≥ 8× its floor, present at
-                        half that amplitude or more before the impact.
+                        half that amplitude or more before the impact (in the engine band, the sentence says
+                        that a single engine line looks the same).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import math
 
 import numpy as np
 
+from ..condition import ENGINE_BAND_HZ
 from ..recording import FRONT_TIRES, STANDARD_GRAVITY
 from .evidence import spectral_line
 from .joint_fit import TractorFit
@@ -240,9 +242,14 @@ def _periodic(fit, base):
         if best is None or ratio > best[3]:
             best = (tire, f, amp, ratio, pre_amp)
     tire, f, amp, ratio, pre_amp = best
-    return ratio >= 8.0 and pre_amp >= 0.5 * amp, (
-        f"{f:.2f} Hz line of {amp:.2f} m/s^2 in {tire} all through the residual ({ratio:.0f}x the spectral floor), "
-        f"{pre_amp:.2f} m/s^2 already before the impact: steady, at speed / {pb.rec.speed_m_s / f:.3f} m")
+    text = (f"{f:.2f} Hz line of {amp:.2f} m/s^2 in {tire} all through the residual ({ratio:.0f}x the spectral "
+            f"floor), {pre_amp:.2f} m/s^2 already before the impact: steady, at speed / {pb.rec.speed_m_s / f:.3f} m")
+    if f >= ENGINE_BAND_HZ[0]:
+        # the conditioning removes an engine by its orders; one line alone looks the same as the lugs or the road
+        text += (f"; the line lies in the engine band (from {ENGINE_BAND_HZ[0]:.0f} Hz) and an engine line without "
+                 f"orders looks the same in one recording: one whose frequency does not follow the speed between "
+                 f"runs is the engine's")
+    return ratio >= 8.0 and pre_amp >= 0.5 * amp, text
 
 
 _CHECKS = {"enveloping": _enveloping, "lift_off": _lift_off, "axle_coupling": _axle, "roll_coupling": _roll,
