@@ -198,8 +198,9 @@ def _prominent(freq, specs, f, lobe_hz, prominence=None) -> tuple[bool, float]:
     return min(ratios) >= (prominence or LINE_PROMINENCE), min(ratios)
 
 
-def _engine_lines(t, channels, fs, cutoff_hz, keep) -> list[dict]:
-    """The engine's lines found on every channel: [{"frequency_hz", "order", "amplitude_m_s2": [...]}].
+def _engine_lines(t, channels, fs, cutoff_hz, keep, single=False) -> list[dict]:
+    """The engine's lines found on every channel: [{"frequency_hz", "order", "amplitude_m_s2": [...]}]
+    (with `single`, also one line without orders).
 
     Lines are detected on spectra of the samples `keep` (away from the impacts, whose broadband
     content would otherwise hide a weak line and leak into every line's fit) and fitted there.
@@ -237,7 +238,7 @@ def _engine_lines(t, channels, fs, cutoff_hz, keep) -> list[dict]:
             break
     orders = [m for m in range(1, MAX_ORDERS + 1) if m * f1 <= 0.45 * fs - lobe - _NEIGHBOURHOOD_HZ
               and (m == 1 or _prominent(freq, specs, m * f1, lobe, ORDER_PROMINENCE)[0])]
-    if len(orders) < 2:
+    if len(orders) < 2 and not single:
         return []     # one steady line alone: a road or lug excitation as likely as an engine (the diagnosis
     #                   names it periodic_disturbance); an engine shows its orders
     # the fundamental refined on all its orders together (the higher ones carry its phase faster), then
@@ -307,7 +308,8 @@ def _own_impacts(rec: Recording, filt: np.ndarray, sigma: np.ndarray) -> dict[st
     return out
 
 
-def condition(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce: bool = True) -> Recording:
+def condition(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce: bool = True,
+              single_line: bool = False) -> Recording:
     """`rec` with offsets, drifts, engine lines and flipped signs removed, and its speed checked.
 
     Parameters
@@ -317,6 +319,10 @@ def condition(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce:
         Low-pass cut-off of the analysis, Hz.
     announce : bool
         Print each warning on stderr (``cleatfmu: warning: ...``).
+    single_line : bool
+        Also remove one steady line without orders (``steady_line``): an engine's or the lugs', it hides
+        the free decay the per-tire identification reads.  The diagnosis keeps it and models it
+        (``periodic_disturbance``).
 
     Returns
     -------
@@ -346,11 +352,18 @@ def condition(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce:
     for i, (_, _, i_rise) in enumerate(impacts[c] for c in names):
         for j in (i_rise, int(np.argmax(np.abs(rough[i])))):
             keep &= (t < t[j] - _IMPACT_SPAN_S[0]) | (t > t[j] + _IMPACT_SPAN_S[1])
-    lines = _engine_lines(t, x, fs, cutoff_hz, keep if keep.sum() > 0.25 * t.size else np.ones(t.size, bool))
+    lines = _engine_lines(t, x, fs, cutoff_hz, keep if keep.sum() > 0.25 * t.size else np.ones(t.size, bool),
+                          single_line)
     for line in lines:
         arg = 2 * np.pi * line["frequency_hz"] * t
         x -= line["coef"][:, :1] * np.cos(arg)[None, :] + line["coef"][:, 1:] * np.sin(arg)[None, :]
-    if lines:
+    if len(lines) == 1:     # single_line: no orders, so an engine or the lugs
+        doc["steady_line"] = {"frequency_hz": lines[0]["frequency_hz"],
+                              "amplitude_m_s2": dict(zip(names, lines[0]["amplitude_m_s2"]))}
+        warnings.append(f"steady {lines[0]['frequency_hz']:.2f} Hz line without orders on every channel (an "
+                        f"engine or the lugs; largest {max(lines[0]['amplitude_m_s2']):.3g} m/s^2) removed for "
+                        f"the identification of the free decay; diagnose models it instead")
+    elif lines:
         doc["engine"] = [{"frequency_hz": ln["frequency_hz"], "order": ln["order"],
                           "amplitude_m_s2": dict(zip(names, ln["amplitude_m_s2"]))} for ln in lines]
         f1 = lines[0]["frequency_hz"]
@@ -445,7 +458,7 @@ def conditioning_json(rec: Recording) -> dict | None:
     doc = rec.conditioning
     if not doc:
         return None
-    keys = ("offset_drift", "engine", "flipped", "flip_ambiguous", "warnings")
+    keys = ("offset_drift", "engine", "steady_line", "flipped", "flip_ambiguous", "warnings")
     out = {k: doc[k] for k in keys if doc.get(k)}
     if out and "speed" in doc:
         out["speed"] = doc["speed"]

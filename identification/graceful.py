@@ -110,7 +110,7 @@ def identify_channels(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_
 
     if method not in ("paper", "waveform"):
         raise ValueError(f"unknown method {method!r}")
-    rec = focus(rec, cutoff_hz=cutoff_hz)
+    rec = focus(rec, cutoff_hz=cutoff_hz, single_line=True)
     tires = list(rec.tires if tires is None else tires)
     window = window_json(rec)
     try:

@@ -172,7 +172,7 @@ def identify(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ
     """
     from .window import focus, window_json
 
-    rec = focus(rec, cutoff_hz=cutoff_hz)
+    rec = focus(rec, cutoff_hz=cutoff_hz, single_line=True)
     signals = preprocess(rec, tires, cutoff_hz=cutoff_hz)
     window = window_json(rec)
     return {name: identify_paper(sig, rec.mass_kg(name), source=rec.source, window=window)

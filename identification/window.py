@@ -156,7 +156,8 @@ def impact_window(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ) -> tu
     return float(start_s), float(end_s)
 
 
-def focus(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce: bool = True) -> Recording:
+def focus(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce: bool = True,
+          single_line: bool = False) -> Recording:
     """The recording to analyse: for a long recording (:func:`is_long`) its impact window; conditioned.
 
     Every analysis starts here.  After the window, the recording is conditioned
@@ -170,6 +171,9 @@ def focus(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce: boo
         Low-pass cut-off of the analysis, Hz.
     announce : bool
         Print a note naming the window and the conditioning's warnings on stderr (``cleatfmu: note: ...``).
+    single_line : bool
+        Also remove a steady line without orders (the per-tire identification;
+        :func:`identification.condition.condition`).
 
     Returns
     -------
@@ -179,7 +183,8 @@ def focus(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce: boo
     """
     from .condition import condition
 
-    return condition(_window(rec, cutoff_hz, announce), cutoff_hz=cutoff_hz, announce=announce)
+    return condition(_window(rec, cutoff_hz, announce), cutoff_hz=cutoff_hz, announce=announce,
+                     single_line=single_line)
 
 
 def _window(rec: Recording, cutoff_hz: float, announce: bool) -> Recording:

@@ -238,25 +238,29 @@ def test_the_decoupling_roll_index_makes_an_axle_pair_two_independent_corners():
         assert abs(((J / masses) @ J.T)[pair, pair][0, 1]) > 1e-6
 
 
-def test_a_single_engine_line_without_orders_is_left_to_the_diagnosis_and_said_so():
+def test_a_single_engine_line_without_orders_is_removed_for_identify_and_modelled_by_diagnose():
     """A 45 Hz engine line of 2 m/s^2 and no orders is no engine to the conditioning (a lug or road line looks
     the same).  Its RMS before the impact is no noise floor: the rear impacts stand 9x it, but 3x above the
-    line's peaks, so they are found.  The waveform fit gets the front tires; the rear decays sink under the
-    line and are refused by a named rule (no exit); the diagnosis names periodic_disturbance alone, says an
+    line's peaks, so they are found.  The per-tire identification removes the line (``steady_line``, warned)
+    and gets every tire with both methods; the diagnosis keeps it, names periodic_disturbance alone, says an
     engine line looks the same, and gets every k and c."""
     from identification.diagnose.joint_select import diagnose_tractor
-    from identification.graceful import Refusal, identify_channels
+    from identification.graceful import identify_channels
+    from identification.window import focus
 
     run = _run(**{"engine.frequency_hz": 45.0, "engine.amplitude_m_s2": 2.0, "engine.orders": 1})
     assert "engine" not in condition(run.recording, announce=False).conditioning
+    doc = focus(run.recording, announce=False, single_line=True).conditioning
+    assert doc["steady_line"]["frequency_hz"] == pytest.approx(45.0, abs=0.01)
+    for tire, amp in doc["steady_line"]["amplitude_m_s2"].items():
+        assert amp == pytest.approx(2.0, rel=0.02), tire
     truth = run.truth["tires"]
-    res = identify_channels(run.recording, method="waveform")
-    for tire in ("FL", "FR"):
-        assert res[tire].k == pytest.approx(truth[tire]["k"], rel=0.03), tire
-        assert res[tire].c == pytest.approx(truth[tire]["c"], rel=0.10), tire
-    for tire in ("RL", "RR"):
-        assert isinstance(res[tire], Refusal) and "peaks above the noise" in res[tire].rule, res[tire]
+    for method in ("paper", "waveform"):
+        for tire, res in identify_channels(run.recording, method=method).items():
+            assert res.k == pytest.approx(truth[tire]["k"], rel=0.03), (method, tire)
+            assert res.c == pytest.approx(truth[tire]["c"], rel=0.10), (method, tire)
     diag = diagnose_tractor(run.recording)
+    assert "steady_line" not in diag.problem.rec.conditioning
     assert diag.effects == ["periodic_disturbance"], diag.effects
     assert "an engine line without orders looks the same" in diag.evidence["periodic_disturbance"]
     for tire in diag.channels:
