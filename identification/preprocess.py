@@ -327,15 +327,11 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
         d = np.diff(rec.accel_m_s2[name])
         return noise_rms(d) / np.sqrt(2) * np.sqrt(min(1.0, 2 * cutoff_hz / fs))
 
-    def noise_before(name, t_end):
+    def quiet_before(name, t_end):   # (noise RMS, largest |x|) up to 50 ms before t_end; (raw_noise, 0) if < 0.1 s
         n = int(np.searchsorted(t, t_end - 0.05))
         if n * dt >= 0.1:
-            return noise_rms(filt[name][:n])
-        return raw_noise(name)
-
-    def steady_before(name, t_end):   # the largest |x| where noise_before measured, 0 without that stretch
-        n = int(np.searchsorted(t, t_end - 0.05))
-        return float(np.max(np.abs(filt[name][:n]))) if n * dt >= 0.1 else 0.0
+            return noise_rms(filt[name][:n]), float(np.max(np.abs(filt[name][:n])))
+        return raw_noise(name), 0.0
 
     # Front-axle impact: earliest onset among the front channels present.
     fronts = [n for n in FRONT_TIRES if n in rec.accel_m_s2]
@@ -345,9 +341,8 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
         absx = np.abs(filt[name])
         try:
             i, _ = _onset(absx, 0, absx.size, 0.0, src, name)
-            noise[name] = noise_before(name, t[i])
-            onsets[name], _ = _onset(absx, 0, absx.size, noise[name], src, name,
-                                     steady=steady_before(name, t[i]))
+            noise[name], steady = quiet_before(name, t[i])
+            onsets[name], _ = _onset(absx, 0, absx.size, noise[name], src, name, steady=steady)
         except InputError:
             if name in tires:
                 raise  # a channel not asked for only serves the timing
@@ -355,22 +350,20 @@ def preprocess(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_CUTOFF_
     delay = rec.rear_axle_delay_s()
     for name in (n for n in REAR_TIRES if n in rec.accel_m_s2 and n in tires):
         absx = np.abs(filt[name])
-        background, quiet_end = 0.0, t_front
+        background = 0.0
         if t_front is not None:
             start = int(np.searchsorted(t, t_front + delay - _REAR_TOLERANCE_S))
             if start >= t.size - 1:
                 raise InputError(src, f"channel {name}: record ends before the rear axle reaches the cleat "
                                       f"(expected at t = {t_front + delay:.3f} s)")
-            noise[name] = noise_before(name, t_front)
+            noise[name], steady = quiet_before(name, t_front)
             before = absx[int(np.searchsorted(t, t[start] - _BACKGROUND_S)):start]
             background = float(before.max()) if before.size else 0.0
         else:
             start = 0
             i, _ = _onset(absx, 0, absx.size, 0.0, src, name)
-            quiet_end = t[i]
-            noise[name] = noise_before(name, quiet_end)
-        onsets[name], _ = _onset(absx, start, absx.size, noise[name], src, name, background,
-                                 steady_before(name, quiet_end))
+            noise[name], steady = quiet_before(name, t[i])
+        onsets[name], _ = _onset(absx, start, absx.size, noise[name], src, name, background, steady)
 
     out = {}
     for name in tires:

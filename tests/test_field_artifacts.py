@@ -223,12 +223,11 @@ def test_lift_off_is_named_alone_however_brief_and_never_with_a_roll_that_decoup
 def test_the_decoupling_roll_index_makes_an_axle_pair_two_independent_corners():
     """At the roll index 1 - ybar^2 the axle pair's inverse mass matrix (J M^-1 J^T) is that of two
     independent corners of mass W/g each; 0.05 off it, the wheels are coupled."""
-    from identification.diagnose.joint_evidence import _decoupled_roll_indices
     from identification.model import Body
     from identification.recording import STANDARD_GRAVITY
 
     loads = (21000.0, 17500.0, 30000.0, 26000.0)     # FL, FR, RL, RR: unequal left and right
-    r_front, r_rear = _decoupled_roll_indices([loads[:2], loads[2:]])
+    r_front, r_rear = Body(("FL", "FR", "RL", "RR"), loads, 2.5, roll=True).decoupled_roll_indices()
     for r0, pair in ((r_front, slice(0, 2)), (r_rear, slice(2, 4))):
         J, masses, _ = Body(("FL", "FR", "RL", "RR"), loads, 2.5, roll=True, roll_index=r0).matrices()
         mobility = (J / masses) @ J.T

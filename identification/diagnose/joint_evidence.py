@@ -177,7 +177,7 @@ def _roll(fit, base):
     if "axle_coupling" not in fit.model.effects:
         # axle pairs: the roll index 1 - ybar^2 of an axle (ybar its left/right load offset) decouples its
         # wheels, and a fit there is the independent corners again, however much it gains
-        free = _decoupled_roll_indices(_axle_loads(fit))
+        free = fit.model.body(fit.params).decoupled_roll_indices()
         ri = fit.params["roll_index"]
         ok = ok and all(abs(ri - r0) >= 0.05 and not lo <= r0 <= hi for r0 in free)
         decoupled = f" (left and right decoupled at {', '.join(f'{r0:.3f}' for r0 in free)})"
@@ -185,18 +185,6 @@ def _roll(fit, base):
         f"the right wheels meet the cleat {stagger * 1e3:+.0f} ms after the left ones; {src}'s impact at "
         f"t = {at:.3f} s shows in {obs}: {peak:.2f} m/s^2 peak ({ratio:.0f}x the noise RMS), "
         f"{max(explained, 0):.0%} of it explained through roll, roll index {_ci(fit, 'roll_index', '.3f')}{decoupled}")
-
-
-def _axle_loads(fit: TractorFit) -> list:
-    """(left, right) wheel loads, N, of each axle recorded on both sides."""
-    pb = fit.model.problem
-    loads = pb.rec.wheel_load_N
-    return [(loads[l], loads[r]) for l, r in (("FL", "FR"), ("RL", "RR")) if l in pb.channels and r in pb.channels]
-
-
-def _decoupled_roll_indices(pairs) -> list:
-    """The roll index that decouples each axle pair's wheels, 1 - ybar^2 (ybar = (W_l - W_r) / (W_l + W_r))."""
-    return [1.0 - ((wl - wr) / (wl + wr)) ** 2 for wl, wr in pairs]
 
 
 def _pivot(fit, base):

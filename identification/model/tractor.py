@@ -137,6 +137,19 @@ class Body:
         groups += [(t,) for t in self.tires if t not in done]
         return groups
 
+    def decoupled_roll_indices(self) -> list:
+        """Per axle pair of a body of axle pairs (``roll`` without ``pitch``), the roll index at which its two
+        wheels move as independent corners of mass W/g: 1 - ybar^2 (ybar = (W_l - W_r) / (W_l + W_r), the
+        roll coordinate's offset below)."""
+        if not self.roll or self.pitch:
+            raise ValueError("decoupling roll indices exist for a body of axle pairs (roll without pitch)")
+        out = []
+        for group in self._groups():
+            if len(group) == 2:
+                w0, w1 = self._load(group[0]), self._load(group[1])
+                out.append(1.0 - ((w0 - w1) / (w0 + w1)) ** 2)
+        return out
+
     def matrices(self):
         """(J, mass, coordinates): hub displacement per coordinate (tires × q), diagonal masses, names."""
         try:                                   # (a fit builds the same body for many model runs)
