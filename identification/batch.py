@@ -209,7 +209,8 @@ def diagnose_recording(csv_path: str, stem: str, out_dir: str) -> DiagnosisRepor
     rec = read_recording(csv_path)
     with _timed(rep.timings, "diagnose"):
         try:
-            diag, gain = run_tractor_diagnosis(rec, fmu_dir=Path(out_dir) / "fmu", stem=f"{stem}_extended")
+            diag, gain = run_tractor_diagnosis(rec, fmu_dir=Path(out_dir) / "fmu", stem=f"{stem}_extended",
+                                               strict=False)
         except (InputError, ValueError) as exc:
             rep.errors.append(f"diagnose: {getattr(exc, 'problem', exc)}")
             return rep

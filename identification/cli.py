@@ -146,8 +146,6 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 def _add_identify(sub) -> None:
     """Register ``cleatfmu identify``."""
-    from .preprocess import DEFAULT_CUTOFF_HZ
-
     p = sub.add_parser("identify", help="identify tire stiffness k and damping c from a cleat recording",
                        description="Identify k and c of each tire by the cleat-test paper's method "
                                    "(logarithmic decrement for k, exponential fit through the first peak for c).")
@@ -162,8 +160,8 @@ def _add_identify(sub) -> None:
                         "waveform: least-squares damped-sinusoid fit of the free decay, with 95%% "
                         "confidence intervals (default: %(default)s)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units) instead of a table")
-    p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ,
-                   help="low-pass cut-off, Hz (default %(default)g; zero-phase 5th-order Butterworth)")
+    p.add_argument("--cutoff-hz", type=float, default=None,
+                   help="low-pass cut-off, Hz (default: 100, or 0.4 x the sampling rate when lower; zero-phase 5th-order Butterworth)")
     p.set_defaults(func=cmd_identify)
 
 

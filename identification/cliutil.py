@@ -96,17 +96,25 @@ def read_recording_arg(args):
     ------
     InputError
         Both or neither given, an unknown example, or an unreadable recording.
+
+    A command whose ``--cutoff-hz`` was not given gets :func:`identification.preprocess.default_cutoff_hz`
+    of the recording's sampling rate in ``args.cutoff_hz``.
     """
     from .examples import example_path
+    from .preprocess import default_cutoff_hz
     from .recording import read_recording
 
     if args.example is not None:
         if args.recording is not None:
             raise InputError("--example", "give either a recording or --example, not both")
-        return read_recording(example_path(args.example))
-    if args.recording is None:
+        rec = read_recording(example_path(args.example))
+    elif args.recording is None:
         raise InputError(None, "no recording given (a REC.csv path, or --example NAME)")
-    return read_recording(args.recording)
+    else:
+        rec = read_recording(args.recording)
+    if hasattr(args, "cutoff_hz") and args.cutoff_hz is None:
+        args.cutoff_hz = default_cutoff_hz(rec.sample_rate_hz)
+    return rec
 
 
 # ----------------------------------------------------------------------------- output files and folders

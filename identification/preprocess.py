@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import functools
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,12 +36,19 @@ from .errors import InputError
 from .recording import FRONT_TIRES, REAR_TIRES, STANDARD_GRAVITY, Recording
 
 __all__ = [
-    "DEFAULT_CUTOFF_HZ", "FILTER_ORDER", "TireSignal",
-    "lowpass", "lowpass_design", "filter_guard_s", "noise_rms", "check_clipping", "preprocess",
+    "DEFAULT_CUTOFF_HZ", "FILTER_ORDER", "TireSignal", "default_cutoff_hz",
+    "lowpass", "lowpass_design", "filter_guard_s", "noise_rms", "broadband_noise", "check_clipping", "preprocess",
 ]
 
 DEFAULT_CUTOFF_HZ = 100.0
 FILTER_ORDER = 5
+#: Without a cut-off given, at most this fraction of the sampling rate (a 200 Hz recording: 80 Hz).
+_DEFAULT_CUTOFF_FRACTION = 0.4
+
+
+def default_cutoff_hz(sample_rate_hz: float) -> float:
+    """The commands' low-pass cut-off when none is given: 100 Hz, or 0.4 x the sampling rate when lower."""
+    return min(DEFAULT_CUTOFF_HZ, _DEFAULT_CUTOFF_FRACTION * float(sample_rate_hz))
 #: Rise threshold for impact detection, relative to the burst maximum.
 _RISE_FRACTION = 0.3
 #: The onset is where the signal first left this fraction of the burst maximum.
@@ -182,6 +190,36 @@ def noise_rms(x) -> float:
     """Robust RMS of a noise segment (1.4826 × median absolute deviation)."""
     x = np.asarray(x, dtype=float)
     return float(1.4826 * np.median(np.abs(x - np.median(x))))
+
+
+def broadband_noise(x, *, sample_rate_hz: float) -> tuple[float, float, float]:
+    """The broadband part of a quiet segment, apart from steady spectral lines: (RMS, line share, line Hz).
+
+    A quiet stretch can hold a steady periodic signal (lugs, an engine line the conditioning left) that
+    is not noise: counted as noise, it would let a model that misses it pass as "at the noise floor".
+    The Hann-windowed periodogram's broadband level is its running median over ±5 % of the band (at
+    least ±4 bins), divided by ln 2 (a periodogram bin of noise is exponential: median = ln 2 x mean);
+    its sum is the broadband variance.  The line share is 1 - broadband / total variance (about 0.05 or
+    less for noise alone), and the line's frequency the periodogram's largest bin.
+    """
+    x = np.asarray(x, dtype=float)
+    x = x - x.mean()
+    n = x.size
+    if n < 16:
+        return noise_rms(x), 0.0, 0.0
+    w = np.hanning(n)
+    p = np.abs(np.fft.rfft(x * w)) ** 2
+    half = max(4, int(0.05 * p.size))
+    pad = np.concatenate((np.full(half, np.nan), p[1:], np.full(half, np.nan)))
+    windows = np.lib.stride_tricks.sliding_window_view(pad, 2 * half + 1)
+    level = np.nanmedian(windows, axis=1) / np.log(2)
+    total, broad = float(p[1:].sum()), float(level.sum())
+    if total <= 0:
+        return 0.0, 0.0, 0.0
+    var = float(np.mean(x ** 2))
+    share = 1.0 - min(broad / total, 1.0)
+    line_hz = float(np.argmax(p[1:]) + 1) * sample_rate_hz / n
+    return math.sqrt(var * (1.0 - share)), share, line_hz
 
 
 def check_clipping(x, *, source=None, tire: str = "") -> None:

@@ -179,8 +179,10 @@ def _diagnosis_section(r) -> str:
                             for name in ("pitch_index", "roll_index", "pivot_index") if body.get(name))
         out.append(f'<p>Effects the four-corner model misses: <b>{_e(effects)}</b>. Front axle {body["front_axle"]}'
                    f'{"; " + indices if indices else ""}. Speed {speed["sidecar"] * 3.6:.2f} km/h (sidecar){delay}. '
-                   f'Extended FMUs co-simulated under the body agree with the fitting model to '
-                   f'{d["agreement"]:.1e}; diagnosis {d["seconds"]:.1f} s. Intervals: {_e(d["intervals"])}.</p>')
+                   + (f'Extended FMUs co-simulated under the body agree with the fitting model to '
+                      f'{d["agreement"]:.1e}' if d["agreement"] is not None else
+                      "The extended model's FMUs cannot start (see the warnings): none was kept")
+                   + f'; diagnosis {d["seconds"]:.1f} s. Intervals: {_e(d["intervals"])}.</p>')
         for name in d["effects"]:
             out.append(f'<div class="effect"><b>{_e(name)}</b>: {_e(d["evidence"].get(name, ""))}</div>')
         if "diagnosis" in rep.figures:

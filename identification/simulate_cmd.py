@@ -13,7 +13,6 @@ from pathlib import Path
 
 from .cliutil import add_example_option, check_output, choose_tire, read_recording_arg
 from .errors import InputError
-from .preprocess import DEFAULT_CUTOFF_HZ
 
 __all__ = ["add_parser"]
 
@@ -158,7 +157,7 @@ def run(args) -> int:
         from .plausibility import check_option
 
         check_option("--max-step-s", args.max_step_s)
-        if args.cutoff_hz > 0 and args.max_step_s > 0.4 / args.cutoff_hz:   # a NaN cut-off: refused later
+        if args.cutoff_hz is not None and args.cutoff_hz > 0 and args.max_step_s > 0.4 / args.cutoff_hz:   # a NaN cut-off: refused later
             raise InputError("--max-step-s", f"{args.max_step_s:g} s is too coarse for the low-pass at "
                                              f"{args.cutoff_hz:g} Hz: the co-simulation must sample at 2.5 x the "
                                              f"cut-off or faster (a step of at most {0.4 / args.cutoff_hz:.3g} s)")
@@ -209,8 +208,8 @@ def add_parser(subparsers) -> None:
                                                      "if needed")
     p.add_argument("--method", choices=("paper", "waveform"), default=None,
                    help="one FMU: method to re-identify k and c from the simulated acceleration (default: paper)")
-    p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ,
-                   help="low-pass cut-off, Hz (default %(default)g)")
+    p.add_argument("--cutoff-hz", type=float, default=None,
+                   help="low-pass cut-off, Hz (default: 100, or 0.4 x the sampling rate when lower)")
     p.add_argument("--max-step-s", type=float, default=None, metavar="H",
                    help="largest co-simulation step, s (default 2.5e-4 for one FMU, 1e-3 for four, as diagnose)")
     p.add_argument("-v", "--verbose", action="store_true", help="four FMUs: also print the time taken")

@@ -202,15 +202,17 @@ class TractorGain:
     """Per channel NRMSE of the baseline and final models as FMUs co-simulated with fmpy.
 
     ``note`` says why the baseline's NRMSE is its fitting model's instead (its FMUs could not start: the
-    four-corner fit of a recording it cannot explain may leave a tire that carries no load), else None.
+    four-corner fit of a recording it cannot explain may leave a tire that carries no load), else None;
+    ``final_note`` says the same of the final model (then ``agreement`` is None and no FMU is kept).
     """
 
     nrmse_before: dict
     nrmse_after: dict
-    agreement: float          # max |FMU − fitting model| / max |fitting model|, final model, all channels
+    agreement: float | None   # max |FMU − fitting model| / max |fitting model|, final model, all channels
     fmu_paths: list
     seconds: float
     note: str | None = None
+    final_note: str | None = None
 
 
 def _cosim_predict(fit, paths) -> dict:
@@ -230,11 +232,13 @@ def _nrmse(problem, pred: dict) -> dict:
                      / np.sqrt(np.mean(problem.measured[c][w] ** 2))) for c in problem.channels}
 
 
-def measure_tractor_gain(diag, fmu_dir=None, *, stem: str | None = None) -> TractorGain:
+def measure_tractor_gain(diag, fmu_dir=None, *, stem: str | None = None, strict: bool = True) -> TractorGain:
     """Build the FMUs of the baseline and of the final model, co-simulate both under the body.
 
     With `fmu_dir` the final model's FMUs are kept there (``<stem>_<TIRE>.fmu``,
-    one per tire, written together or not at all).
+    one per tire, written together or not at all).  FMUs that cannot start never cost the diagnosis:
+    the NRMSE is then the fitting model's, with a note, and none is kept; only when `fmu_dir` asks for
+    them and `strict` is set is it an error.
     """
     t0 = time.perf_counter()
     pb = diag.problem
@@ -248,16 +252,25 @@ def measure_tractor_gain(diag, fmu_dir=None, *, stem: str | None = None) -> Trac
             before = diag.baseline.prediction
             note = f"{exc.problem}; the four-corner NRMSE is its fitting model's"
         final_paths = build_tractor_fmus(diag.final, tmp, stem)
-        after = _cosim_predict(diag.final, final_paths)
+        final_note = None
+        try:
+            after = _cosim_predict(diag.final, final_paths)
+        except InputError as exc:
+            if fmu_dir is not None and strict:
+                raise
+            after = diag.final.prediction
+            final_note = (f"{exc.problem}; its NRMSE is the fitting model's, and its FMUs would not start in "
+                          f"an importer either")
         kept = []
-        if fmu_dir is not None:
+        if fmu_dir is not None and final_note is None:
             from ._files import publish_files
             kept = publish_files({Path(fmu_dir) / p.name: p for p in final_paths})
     fitting = diag.final.prediction
     scale = max(float(np.max(np.abs(fitting[c]))) for c in pb.channels)
-    agreement = max(float(np.max(np.abs(after[c] - fitting[c]))) for c in pb.channels) / max(scale, 1e-12)
+    agreement = None if final_note else \
+        max(float(np.max(np.abs(after[c] - fitting[c]))) for c in pb.channels) / max(scale, 1e-12)
     return TractorGain(nrmse_before=_nrmse(pb, before), nrmse_after=_nrmse(pb, after), agreement=agreement,
-                       fmu_paths=kept, seconds=time.perf_counter() - t0, note=note)
+                       fmu_paths=kept, seconds=time.perf_counter() - t0, note=note, final_note=final_note)
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -219,6 +219,19 @@ def test_cutoff_not_below_nyquist(cli, good_recording):
                        "not below the Nyquist frequency 500 Hz")
 
 
+def test_default_cutoff_follows_a_low_sampling_rate(cli, tmp_path):
+    """A 200 Hz recording needs no option: without --cutoff-hz the low-pass sits at 0.4 x 200 = 80 Hz
+    (below Nyquist), and k comes out of the damped sines' closed form."""
+    rec = analytic_recording(fs=200.0)
+    path = write_recording(rec, tmp_path / "slow", value_decimals=6)
+    res = cli("identify", path, "--json")
+    assert res.code == 0, res.err
+    doc = json.loads(res.out)
+    for tire in ("FL", "RL"):
+        assert doc["tires"][tire]["k"] == pytest.approx(true_k(tire, (21.65, 0.08) if tire == "FL" else (16.0, 0.05)),
+                                                         rel=0.03)
+
+
 def test_console_script_exit_status_without_traceback(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "identification.cli", "identify", str(tmp_path / "x.csv")],
                           capture_output=True, text=True)

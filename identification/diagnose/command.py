@@ -93,10 +93,11 @@ def _text(diag, gain) -> str:
 
 
 def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=None, stem: str | None = None,
-                          workers: int = 1, progress=None):
+                          workers: int = 1, progress=None, strict: bool = True):
     """Diagnose every channel jointly and measure the gain with one FMU per tire: (TractorDiagnosis, TractorGain).
 
-    With `fmu_dir` the extended FMUs are kept there as ``<stem>_<TIRE>.fmu`` (`stem`: the recording's).
+    With `fmu_dir` the extended FMUs are kept there as ``<stem>_<TIRE>.fmu`` (`stem`: the recording's); FMUs
+    that cannot start are then an error unless `strict` is off (then none is kept, and a warning says why).
     """
     from ..tractor_cosim import measure_tractor_gain
     from .joint_select import diagnose_tractor
@@ -105,7 +106,7 @@ def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=
     if progress is not None:
         progress("FMU co-simulation")
     try:
-        gain = measure_tractor_gain(diag, fmu_dir, stem=stem)
+        gain = measure_tractor_gain(diag, fmu_dir, stem=stem, strict=strict)
     except OSError as exc:
         raise InputError(fmu_dir, f"cannot write: {exc.strerror or exc}") from None
     return diag, gain
@@ -138,8 +139,10 @@ def diagnosis_warnings(diag, gain) -> list[str]:
                    f"{refit['sidecar_m_s'] * 3.6:.3g} km/h "
                    f"({100 * (refit['from_delay_m_s'] / refit['sidecar_m_s'] - 1):+.1f} %): fitted again at the "
                    f"delay's speed")
-    if gain.note:
+    if gain.note and gain.note != getattr(gain, "final_note", None):
         out.append(gain.note)
+    if getattr(gain, "final_note", None):
+        out.append(gain.final_note)
     return out
 
 
@@ -170,7 +173,9 @@ def _tractor_text(diag, gain, verbose: bool = False) -> str:
                      f"c {t['c'] / 1e3:.3f} kN s/m ({t['c_ci'][0] / 1e3:.3f}-{t['c_ci'][1] / 1e3:.3f})  "
                      f"NRMSE {t['nrmse_before']:.1%} -> {t['nrmse_after']:.1%} (noise {t['noise_nrmse']:.1%}): {flag}")
     lines.append(f"  95 % intervals: {doc['intervals']}")
-    lines.append(f"  FMU co-simulation (fmpy, one FMU per tire) agrees with the fitting model to {gain.agreement:.1e}"
+    check = "the final model's FMUs cannot start (see the warning)" if gain.agreement is None else \
+        f"agrees with the fitting model to {gain.agreement:.1e}"
+    lines.append(f"  FMU co-simulation (fmpy, one FMU per tire): {check}"
                  + (f"; {diag.seconds:.1f} s diagnosis, {gain.seconds:.1f} s FMU gain check" if verbose else ""))
     return "\n".join(lines)
 
@@ -225,6 +230,8 @@ def run(args) -> int:
             diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
         if gain.note:
             doc["nrmse_before_note"] = gain.note
+        if getattr(gain, "final_note", None):
+            doc["nrmse_after_note"] = gain.final_note
         if window_json(diag.problem.rec) is not None:    # the conditioning with the signs the fit chose
             doc["analysis_window"] = window_json(diag.problem.rec)
         print(json.dumps(doc, indent=2))
@@ -253,8 +260,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--fmu-dir", metavar="DIR", help="write one extended tire FMU per tire into DIR "
                                                     "(REC_FL.fmu .. REC_RR.fmu)")
     p.add_argument("--plot", metavar="OUT.png", help="write measured vs the corners and the final model, per channel")
-    p.add_argument("--cutoff-hz", type=float, default=DEFAULT_CUTOFF_HZ,
-                   help="low-pass cut-off, Hz (default %(default)g)")
+    p.add_argument("--cutoff-hz", type=float, default=None,
+                   help="low-pass cut-off, Hz (default: 100, or 0.4 x the sampling rate when lower)")
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
                    help="processes fitting candidate models in parallel (default: 2, or 1 on a one-core machine)")
     p.add_argument("-v", "--verbose", action="store_true", help="also print the time taken (text output)")

@@ -24,7 +24,7 @@ recorded - the speed it implies is wheelbase / delay).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -32,7 +32,7 @@ from ..errors import InputError
 from ..model import Body, Cleat, TractorModel
 from ..model.kernels import run_model
 from ..model.sensing import sensed_lowpassed, sensed_lowpassed_reference
-from ..preprocess import DEFAULT_CUTOFF_HZ, noise_rms, preprocess
+from ..preprocess import DEFAULT_CUTOFF_HZ, broadband_noise, noise_rms, preprocess
 from ..recording import FRONT_TIRES, TIRES, Recording
 from .models import tire_law_parameters
 
@@ -59,6 +59,8 @@ LEAD_S = 0.05
 #: Margin before the first detected onset of the samples that give the noise floor, s (the robust RMS
 #: ignores the few samples of an enveloping impact that rises before its onset is detected).
 QUIET_MARGIN_S = 0.05
+#: A quiet stretch whose steady lines hold more than this share of its energy is not noise alone.
+STEADY_LINE_SHARE = 0.5
 PRE_S = 0.3
 DEFAULT_STEP_S = 1e-3
 #: Largest phase 2π f_aa h of the grid step at the anti-alias cut-off for models with point-contact edges.
@@ -85,15 +87,29 @@ def _noise_floor(rec: Recording, channels, filtered: dict, quiet: np.ndarray, fa
     of the noise the low-pass keeps, that share pooled over the channels (the
     median ratio), which needs no assumption on the noise's spectrum.  Under
     0.1 s of quiet samples: `fallback`.
+
+    A channel whose quiet stretch holds a steady line (over :data:`STEADY_LINE_SHARE` of its energy: lugs,
+    a road or engine line) gets the broadband part as its floor
+    (:func:`identification.preprocess.broadband_noise`): a model that leaves the line in its residual is
+    then not "at the noise floor".  Returns (floors, {channel: {"share", "frequency_hz", "quiet_rms"}}).
     """
     if quiet.sum() / rec.sample_rate_hz < 0.1:
-        return dict(fallback)
-    raw = {c: noise_rms(rec.accel_m_s2[c][quiet]) for c in channels}
-    ratios = [noise_rms(filtered[c][quiet]) / raw[c] for c in channels if raw[c] > 0]
+        return dict(fallback), {}
+    raw, low, lines = {}, {}, {}
+    for c in channels:
+        x, y = rec.accel_m_s2[c][quiet], filtered[c][quiet]
+        rms, share, hz = broadband_noise(x, sample_rate_hz=rec.sample_rate_hz)
+        if share > STEADY_LINE_SHARE:   # a steady line is signal, not noise: the floor is the broadband part
+            raw[c] = rms
+            low[c] = broadband_noise(y, sample_rate_hz=rec.sample_rate_hz)[0]
+            lines[c] = {"share": share, "frequency_hz": hz, "quiet_rms": float(np.sqrt(np.mean((x - x.mean()) ** 2)))}
+        else:
+            raw[c], low[c] = noise_rms(x), noise_rms(y)
+    ratios = [low[c] / raw[c] for c in channels if raw[c] > 0]
     if not ratios:
-        return dict(fallback)
+        return dict(fallback), lines
     kept = float(np.median(ratios))
-    return {c: raw[c] * kept if raw[c] > 0 else fallback[c] for c in channels}
+    return {c: raw[c] * kept if raw[c] > 0 else fallback[c] for c in channels}, lines
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,6 +126,7 @@ class TractorProblem:
     cutoff_hz: float
     step_s: float
     first_impact_s: float
+    steady_lines: dict = field(default_factory=dict)   # channel -> the steady line in its quiet stretch
 
     @classmethod
     def from_recording(cls, rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ,
@@ -123,13 +140,13 @@ class TractorProblem:
         window = t >= max(t[0], first - LEAD_S)
         if window.sum() < 20:
             raise InputError(rec.source, "too few samples after the first impact to fit a model")
-        noise = _noise_floor(rec, channels, {c: sigs[c].filtered_m_s2 for c in channels}, t < first - QUIET_MARGIN_S,
-                             {c: sigs[c].noise_m_s2 for c in channels})
+        noise, lines = _noise_floor(rec, channels, {c: sigs[c].filtered_m_s2 for c in channels},
+                                    t < first - QUIET_MARGIN_S, {c: sigs[c].noise_m_s2 for c in channels})
         return cls(rec=rec, channels=channels, measured={c: sigs[c].filtered_m_s2 for c in channels},
                    noise={c: max(noise[c], 1e-6) for c in channels},
                    onsets={c: sigs[c].impact_s for c in channels},
                    dominant_hz={c: sigs[c].dominant_hz for c in channels}, window=window, cutoff_hz=cutoff_hz,
-                   step_s=step_s, first_impact_s=first)
+                   step_s=step_s, first_impact_s=first, steady_lines=lines)
 
     @property
     def both_sides(self) -> bool:
