@@ -150,6 +150,7 @@ def _run_tractor(args) -> int:
 
 def run(args) -> int:
     """Run ``cleatfmu simulate``; returns 0 (user errors raise InputError)."""
+    from .preprocess import DEFAULT_CUTOFF_HZ
     from .validation import DEFAULT_MAX_STEP_S, simulate_recording
 
     check_output(args.plot, ".png", "plot", create=False)
@@ -157,10 +158,12 @@ def run(args) -> int:
         from .plausibility import check_option
 
         check_option("--max-step-s", args.max_step_s)
-        if args.cutoff_hz is not None and args.cutoff_hz > 0 and args.max_step_s > 0.4 / args.cutoff_hz:   # a NaN cut-off: refused later
+        # without --cutoff-hz the cut-off is at most DEFAULT_CUTOFF_HZ: a step too coarse for it is too coarse
+        cutoff = DEFAULT_CUTOFF_HZ if args.cutoff_hz is None else args.cutoff_hz
+        if cutoff > 0 and args.max_step_s > 0.4 / cutoff:   # a NaN cut-off: refused later
             raise InputError("--max-step-s", f"{args.max_step_s:g} s is too coarse for the low-pass at "
-                                             f"{args.cutoff_hz:g} Hz: the co-simulation must sample at 2.5 x the "
-                                             f"cut-off or faster (a step of at most {0.4 / args.cutoff_hz:.3g} s)")
+                                             f"{cutoff:g} Hz: the co-simulation must sample at 2.5 x the "
+                                             f"cut-off or faster (a step of at most {0.4 / cutoff:.3g} s)")
     args.fmu, args.recording = _inputs(args)
     if len(args.fmu) > 1 or Path(args.fmu[0]).is_dir():
         return _run_tractor(args)

@@ -143,6 +143,9 @@ def diagnosis_warnings(diag, gain) -> list[str]:
         out.append(gain.note)
     if getattr(gain, "final_note", None):
         out.append(gain.final_note)
+    for check in (diag.extra.get("free_decay") or {}).values():
+        if check.get("reason"):
+            out.append(check["reason"])
     return out
 
 

@@ -5,11 +5,16 @@ measurement over the diagnosis window, each divided by that channel's noise
 RMS.  ``scipy.optimize.least_squares`` (Levenberg-Marquardt, positive
 parameters on a log scale) minimises it.  95 % intervals: the sandwich
 covariance of the estimates under serially correlated residuals (the
-low-passed noise is correlated over several samples; each channel's
-autocovariance, Parzen-tapered), Student's t; a positive parameter's
+low-passed noise is correlated over several samples, a misfit over many
+periods; each channel's autocovariance, Parzen-tapered, up to the lag where
+the residual's autocorrelation has died out), Student's t; a positive parameter's
 interval is built on its logarithm.  The final fits also check the grid step
 (``step_check``): the estimates move to the half step's, and the move widens
-the interval.
+the interval; and they check the model in the impacts against the free decay
+(:func:`impact_weight_shift`): the estimates' move when the impacts weigh a
+tenth widens the interval too, so a model wrong in the impact (a cleat edge,
+a footprint, a sensor chain it does not know) does not leave an interval that
+only white noise would justify.
 
 The intervals hold *if the model is right*.  :func:`unexplained` measures what
 the model leaves: the residual energy beyond the noise floor, its share of the
@@ -30,12 +35,18 @@ from .fit import _exp
 from .tractor import SIGNED, TractorFitModel
 
 __all__ = ["TractorFit", "fit_tractor", "sse_of", "unexplained", "sandwich_covariance", "correlation_lag",
+           "residual_correlation_lag",
            "UNEXPLAINED_RATIO"]
 
 #: A channel whose residual RMS exceeds this multiple of its noise RMS holds unexplained signal.
 UNEXPLAINED_RATIO = 1.5
 #: Largest half-step move (log scale for positive parameters) applied to the estimates.
 MAX_STEP_SHIFT = 0.02
+#: The impact-weight check: the impacts (onset - lead until the tire has rolled over the cleat and this
+#: footprint) weigh this much of the free decay (:func:`impact_weight_shift`).
+IMPACT_WEIGHT = 0.1
+IMPACT_LEAD_S = 0.02
+IMPACT_FOOTPRINT_M = 0.45
 _DIFF_STEP = {"arrival": 2e-5, "stagger": 2e-5, "lug_phase": 1e-3, "lug_amplitude": 1e-3}
 
 
@@ -70,6 +81,34 @@ class TractorFit:
 def correlation_lag(sample_rate_hz: float, cutoff_hz: float) -> int:
     """Lags (samples) over which the low-passed noise is correlated: four periods of the cut-off."""
     return max(10, int(math.ceil(4.0 * sample_rate_hz / cutoff_hz)))
+
+
+def residual_correlation_lag(residual: np.ndarray, sizes, floor: int, *, level: float = 0.1,
+                             max_share: float = 0.25) -> int:
+    """The lag (samples) beyond which every block's residual autocorrelation stays under `level`.
+
+    A residual that is the low-passed noise decorrelates within a few periods of the cut-off (`floor`);
+    one that holds what the model gets wrong (a misfit ringing at the tire's mode) stays correlated over
+    many periods.  The sandwich covariance must span that correlation to hold the misfit's effect on the
+    estimates: the lag is the largest over the blocks, at least `floor`, at most `max_share` of a block.
+    """
+    lag_out = floor
+    row = 0
+    for size in sizes:
+        r = residual[row:row + size]
+        row += size
+        if size < 8:
+            continue
+        r = r - r.mean()
+        nfft = 1 << int(math.ceil(math.log2(2 * size)))
+        fr = np.fft.rfft(r, nfft)
+        acov = np.fft.irfft(fr * np.conj(fr), nfft)[:size]
+        if acov[0] <= 0:
+            continue
+        above = np.flatnonzero(np.abs(acov[: max(2, int(max_share * size))] / acov[0]) > level)
+        if above.size:
+            lag_out = max(lag_out, int(above[-1]) + 1)
+    return lag_out
 
 
 def sandwich_covariance(jac: np.ndarray, residual: np.ndarray, sizes, max_lag: int) -> np.ndarray:
@@ -119,6 +158,36 @@ def sandwich_covariance(jac: np.ndarray, residual: np.ndarray, sizes, max_lag: i
         meat += ((fj.conj() * (weights * spectrum)[:, None]).T @ fj).real / nfft
     bread = np.linalg.pinv(jac.T @ jac)
     return bread @ meat @ bread
+
+
+def impact_spans(problem) -> list:
+    """[start, end] (s) of every impact: from its onset less :data:`IMPACT_LEAD_S` until the tire has rolled
+    over the cleat and a generous footprint, (cleat width + :data:`IMPACT_FOOTPRINT_M`) / speed."""
+    rec = problem.rec
+    length = (rec.cleat_width_m + IMPACT_FOOTPRINT_M) / rec.speed_m_s
+    return [(float(t) - IMPACT_LEAD_S, float(t) + length) for t in problem.onsets.values()]
+
+
+def impact_weight_shift(model: TractorFitModel, jac: np.ndarray, fun: np.ndarray) -> np.ndarray:
+    """How far the estimates move when the impacts weigh :data:`IMPACT_WEIGHT` of the rest (first order).
+
+    The free decay after an impact needs little of the model (the tire on flat ground); the impact needs
+    all of it (the cleat's shape, the footprint, the sensor chain).  A model that is right fits both
+    alike, and the move is at the noise's scale; one that is wrong in the impact pulls the estimates
+    there, and the move measures that pull.  One Gauss-Newton step from the solution of the evenly
+    weighted fit on the re-weighted residual (the Jacobian at hand: no model run).  The move is added
+    to each interval in quadrature, so the interval holds both weightings' estimates.
+    """
+    pb = model.problem
+    t = pb.rec.time_s[pb.window]
+    weight = np.ones(t.size)
+    for a, b in impact_spans(pb):
+        weight[(t >= a) & (t <= b)] = IMPACT_WEIGHT
+    weight = np.tile(weight, len(pb.channels))
+    if weight.size != fun.size or not np.all(np.isfinite(jac)):
+        return np.zeros(jac.shape[1])
+    step = -np.linalg.lstsq(jac * weight[:, None], fun * weight, rcond=None)[0]
+    return np.where(np.isfinite(step), step, 0.0)
 
 
 def _residual_parts(model: TractorFitModel, pred: dict):
@@ -194,11 +263,24 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
         fine = model.predict(params, step_s=(step_s or model.default_step_s()) / 2)
         change = np.concatenate([(fine[c] - pred[c])[w] for c in pb.channels]) / scale
         shift = -np.linalg.lstsq(jac, change, rcond=None)[0]
+    weight_shift = np.zeros(len(free))
+    if step_check and free and not failed:
+        weight_shift = impact_weight_shift(model, jac, fun)
     dof = max(1, fun.size - len(free))
     infl = float(np.mean([long_run_variance_ratio(parts[c]) for c in pb.channels]))
     sizes = [int(w.sum())] * len(pb.channels)
-    lag = correlation_lag(pb.rec.sample_rate_hz, pb.cutoff_hz)
-    cov = sandwich_covariance(jac, fun, sizes, lag) * (fun.size / dof)
+    noise_lag = correlation_lag(pb.rec.sample_rate_hz, pb.cutoff_hz)
+    lag = residual_correlation_lag(fun, sizes, noise_lag)
+    cov = sandwich_covariance(jac, fun, sizes, noise_lag) * (fun.size / dof)
+    if lag > noise_lag and free:
+        # the residual stays correlated beyond the noise's lags (a misfit): each variance is the larger of the
+        # two lags' (a longer lag can also sum negative lobes), the correlations are the noise lag's
+        var = np.diag(cov).copy()
+        longer = np.diag(sandwich_covariance(jac, fun, sizes, lag)) * (fun.size / dof)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            grow = np.where(var > 0, np.sqrt(np.maximum(longer, var) / var), 1.0)
+        grow = np.where(np.isfinite(grow), grow, 1.0)
+        cov = cov * np.outer(grow, grow)
     # a parameter the residual does not depend on (a damping collapsed to zero) is not known to be anything:
     # its interval is unbounded, not the zero width a pseudo-inverse gives it
     norms = np.sqrt(np.sum(jac ** 2, axis=0)) if free else np.zeros(0)
@@ -215,7 +297,7 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
         parts = _residual_parts(model, pred)
     ci = {}
     for i, (name, lg) in enumerate(zip(free, logs)):
-        half = q * math.sqrt(max(0.0, float(cov[i, i])) + float(shift[i]) ** 2)
+        half = q * math.sqrt(max(0.0, float(cov[i, i])) + float(shift[i]) ** 2 + float(weight_shift[i]) ** 2)
         ci[name] = (_exp(x[i] - half), _exp(x[i] + half)) if lg else (params[name] - half, params[name] + half)
     for name, value in fixed.items():
         ci[name] = (value, value)
@@ -230,7 +312,7 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
              for c in pb.channels}
     return TractorFit(model=model, params=params, ci=ci, sse=sse, nrmse=nrmse, prediction=pred,
                       evaluations=count[0], seconds=time.perf_counter() - t0,
-                      extra={"variance_inflation": infl, "in_bounds": in_bounds, "step_s": step_s or model.default_step_s(),
+                      extra={"variance_inflation": infl, "in_bounds": in_bounds, "lag": lag, "weight_shift": weight_shift, "step_s": step_s or model.default_step_s(),
                              "free": free, "covariance": cov, "logs": logs, "step_shift": shift})
 
 

@@ -124,13 +124,18 @@ class TractorDiagnosis:
                 return None
             return {"value": float(fin.params[name]), "ci": [float(v) for v in fin.ci[name]]}
 
+        from .free_decay import widened
+
         tires = {}
+        checks = self.extra.get("free_decay") or {}
         for t in self.channels:
+            check = checks.get(t, {})
             tires[t] = {"k": float(fin.params[f"k_{t}"]), "c": float(fin.params[f"c_{t}"]),
-                        "k_ci": [float(v) for v in fin.ci[f"k_{t}"]], "c_ci": [float(v) for v in fin.ci[f"c_{t}"]],
+                        "k_ci": widened(fin.ci[f"k_{t}"], check, "k"), "c_ci": widened(fin.ci[f"c_{t}"], check, "c"),
                         "effects": list(self.effects), "parameters": self.tire_parameters(t),
                         "nrmse_before": float(before[t]), "nrmse_after": float(after[t]),
-                        "noise_nrmse": self.noise_nrmse(t), "unexplained": self.unexplained[t]}
+                        "noise_nrmse": self.noise_nrmse(t), "unexplained": self.unexplained[t],
+                        **({"free_decay_check": check} if check else {})}
         return {"recording": rec.source, "effects": list(self.effects),
                 "body": {"pitch_index": value("pitch_index"), "roll_index": value("roll_index"),
                          "front_axle": "pivot" if "front_axle_pivot" in self.effects else "rigid",
@@ -284,6 +289,8 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
         diag.extra["speed_refit"] = {"sidecar_m_s": float(rec.speed_m_s),
                                      "from_delay_m_s": float(rec.wheelbase_m / delay),
                                      "first_effects": list(first.effects)}
+    from .free_decay import free_decay_check
+    diag.extra["free_decay"] = free_decay_check(diag)
     return replace(diag, seconds=time.perf_counter() - t0)
 
 

@@ -1,0 +1,83 @@
+"""The diagnosis against the free decay alone: never worse than the simple fit it extends.
+
+Where a hub rings as an independent corner (the diagnosis names no body coupling) with a linear tire
+(no friction, no progressive stiffness: the decay's shape is then the damped sinusoid), the waveform
+fit of its free decay (:func:`identification.waveform.identify_waveform`) gives k and c from the part
+of the record that needs the least of the model: the tire on flat ground.  The joint fit's k and c
+must agree with it within their joint 95 % interval, √(h_joint² + h_decay²) (h the half-widths).
+Where they do not, the joint fit was pulled by what its model gets wrong in the impact (a cleat
+shape, a footprint, an acquisition chain): the output says so, by how much, and the tire's interval
+is widened to hold the free decay's interval too (its union with it), so that it holds both.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..errors import InputError
+from ..preprocess import preprocess
+from ..recording import STANDARD_GRAVITY
+
+__all__ = ["free_decay_check", "BODY_EFFECTS", "SHAPE_EFFECTS"]
+
+#: Named, these make the free decay a body's mode, not the tire's.
+BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
+#: Named, these make the decay's shape other than a damped sinusoid.
+SHAPE_EFFECTS = ("friction_damping", "nonlinear_stiffness")
+
+
+def free_decay_check(diag) -> dict:
+    """Per channel: the free decay's k and c beside the joint fit's, and whether they agree.
+
+    Returns ``{tire: {"valid": bool, "why_not": str | None, "k", "k_ci", "c", "c_ci", "k_apart",
+    "c_apart", "agree": bool, "reason": str | None}}`` (``k_apart``: |Δk| over the joint half-width).
+    """
+    pb = diag.problem
+    rec = pb.rec
+    out = {}
+    named = [e for e in diag.effects if e in BODY_EFFECTS + SHAPE_EFFECTS]
+    for tire in pb.channels:
+        if named:
+            out[tire] = {"valid": False, "why_not": f"{', '.join(named)} named: the free decay is not a "
+                                                    f"linear tire's under a corner mass"}
+            continue
+        try:
+            from ..waveform import identify_waveform
+            sig = preprocess(rec, [tire], cutoff_hz=pb.cutoff_hz, min_peaks=1)[tire]
+            wave = identify_waveform(sig, rec.wheel_load_N[tire] / STANDARD_GRAVITY, source=rec.source)
+        except InputError as exc:
+            out[tire] = {"valid": False, "why_not": f"no waveform fit: {exc.problem}"}
+            continue
+        fin = diag.final
+        entry = {"valid": True, "why_not": None, "k": float(wave.k), "c": float(wave.c),
+                 "k_ci": [float(v) for v in wave.k_ci], "c_ci": [float(v) for v in wave.c_ci]}
+        sentences = []
+        for q in ("k", "c"):
+            est, (lo, hi) = fin.params[f"{q}_{tire}"], fin.ci[f"{q}_{tire}"]
+            h_joint = max(est - lo, hi - est) if math.isfinite(hi) else math.inf
+            h_decay = (entry[f"{q}_ci"][1] - entry[f"{q}_ci"][0]) / 2
+            joint = math.hypot(h_joint, h_decay)
+            apart = abs(est - entry[q]) / joint if joint > 0 else math.inf
+            entry[f"{q}_apart"] = float(apart)
+            if apart > 1:
+                sentences.append(f"{q} {100 * (est / entry[q] - 1):+.1f} % from the free decay's "
+                                 f"({apart:.1f} joint half-widths)")
+        entry["agree"] = not sentences
+        entry["reason"] = None
+        if sentences:
+            left = diag.unexplained.get(tire)
+            where = (f"it leaves {left['share']:.0%} of the signal unexplained in {left['window'][0]:.2f}-"
+                     f"{left['window'][1]:.2f} s" if left else "its residual is at the noise floor, so the "
+                                                                 "decay's own model may be the one that misses")
+            entry["reason"] = (f"{tire}: the joint fit's {' and '.join(sentences)}: the impact pulls the joint "
+                               f"fit ({where}); the interval is widened to hold the free decay's")
+        out[tire] = entry
+    return out
+
+
+def widened(ci, check: dict, q: str):
+    """The interval `ci` of quantity `q` ('k' or 'c'), widened to hold the free decay's where they disagree."""
+    if not check.get("valid") or check.get("agree", True):
+        return [float(v) for v in ci]
+    lo, hi = check[f"{q}_ci"]
+    return [float(min(ci[0], lo)), float(max(ci[1], hi))]
