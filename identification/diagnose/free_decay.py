@@ -5,9 +5,13 @@ Where a hub rings as an independent corner (the diagnosis names no body coupling
 fit of its free decay (:func:`identification.waveform.identify_waveform`) gives k and c from the part
 of the record that needs the least of the model: the tire on flat ground.  The joint fit's k and c
 must agree with it within their joint 95 % interval, √(h_joint² + h_decay²) (h the half-widths).
-Where they do not, the joint fit was pulled by what its model gets wrong in the impact (a cleat
-shape, a footprint, an acquisition chain): the output says so, by how much, and the tire's interval
-is widened to hold the free decay's interval too (its union with it), so that it holds both.
+Where the joint fit's k or c lies outside the free decay's own 95 % interval, the joint fit was pulled
+by what its model gets wrong in the impact (a cleat shape, a footprint, an acquisition chain): the
+tire's k and c are then the free decay's (``"k_source": "free_decay"``; the extended model keeps its
+own in ``parameters``, as its FMUs carry them), each interval the free decay's stretched to hold the
+joint fit's estimate too, and a warning says so, by how much (and in joint half-widths where the two
+intervals do not even overlap so far).  The tire's values are never further from the free decay
+than its interval allows.
 """
 
 from __future__ import annotations
@@ -18,12 +22,12 @@ from ..errors import InputError
 from ..preprocess import preprocess
 from ..recording import STANDARD_GRAVITY
 
-__all__ = ["free_decay_check", "BODY_EFFECTS", "SHAPE_EFFECTS"]
+__all__ = ["free_decay_check", "reported", "BODY_EFFECTS", "SHAPE_EFFECTS"]
 
 #: Named, these make the free decay a body's mode, not the tire's.
 BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
-#: Named, these make the decay's shape other than a damped sinusoid.
-SHAPE_EFFECTS = ("friction_damping", "nonlinear_stiffness")
+#: Named, these make the decay's shape other than a damped sinusoid (a steady line rides on it).
+SHAPE_EFFECTS = ("friction_damping", "nonlinear_stiffness", "periodic_disturbance")
 
 
 def free_decay_check(diag) -> dict:
@@ -59,10 +63,12 @@ def free_decay_check(diag) -> dict:
             joint = math.hypot(h_joint, h_decay)
             apart = abs(est - entry[q]) / joint if joint > 0 else math.inf
             entry[f"{q}_apart"] = float(apart)
+            entry[f"{q}_outside_decay"] = bool(not (entry[f"{q}_ci"][0] <= est <= entry[f"{q}_ci"][1]))
             if apart > 1:
                 sentences.append(f"{q} {100 * (est / entry[q] - 1):+.1f} % from the free decay's "
                                  f"({apart:.1f} joint half-widths)")
         entry["agree"] = not sentences
+        entry["prefer"] = entry["k_outside_decay"] or entry["c_outside_decay"]
         entry["reason"] = None
         if sentences:
             left = diag.unexplained.get(tire)
@@ -70,14 +76,21 @@ def free_decay_check(diag) -> dict:
                      f"{left['window'][1]:.2f} s" if left else "its residual is at the noise floor, so the "
                                                                  "decay's own model may be the one that misses")
             entry["reason"] = (f"{tire}: the joint fit's {' and '.join(sentences)}: the impact pulls the joint "
-                               f"fit ({where}); the interval is widened to hold the free decay's")
+                               f"fit ({where})")
+        if entry["prefer"]:
+            entry["reason"] = ((entry["reason"] + "; ") if entry["reason"] else f"{tire}: ") + \
+                (f"k and c are the free decay's (k {entry['k'] / 1e3:.1f} kN/m, c {entry['c'] / 1e3:.3f} kN s/m): "
+                 f"the joint fit's lie outside its interval (k {100 * (fin.params[f'k_{tire}'] / entry['k'] - 1):+.1f} "
+                 f"%, c {100 * (fin.params[f'c_{tire}'] / entry['c'] - 1):+.1f} %), which is stretched to hold them")
         out[tire] = entry
     return out
 
 
-def widened(ci, check: dict, q: str):
-    """The interval `ci` of quantity `q` ('k' or 'c'), widened to hold the free decay's where they disagree."""
-    if not check.get("valid") or check.get("agree", True):
-        return [float(v) for v in ci]
+def reported(value: float, ci, check: dict, q: str) -> tuple[float, list]:
+    """The tire's value and interval of quantity `q` ('k' or 'c'): the joint fit's, or, where the joint fit's k
+    or c lies outside the free decay's interval, the free decay's with its interval stretched to hold the
+    joint fit's estimate too."""
+    if not check.get("valid") or not check.get("prefer"):
+        return float(value), [float(v) for v in ci]
     lo, hi = check[f"{q}_ci"]
-    return [float(min(ci[0], lo)), float(max(ci[1], hi))]
+    return float(check[q]), [float(min(value, lo)), float(max(value, hi))]

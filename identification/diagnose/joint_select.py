@@ -124,14 +124,16 @@ class TractorDiagnosis:
                 return None
             return {"value": float(fin.params[name]), "ci": [float(v) for v in fin.ci[name]]}
 
-        from .free_decay import widened
+        from .free_decay import reported
 
         tires = {}
         checks = self.extra.get("free_decay") or {}
         for t in self.channels:
             check = checks.get(t, {})
-            tires[t] = {"k": float(fin.params[f"k_{t}"]), "c": float(fin.params[f"c_{t}"]),
-                        "k_ci": widened(fin.ci[f"k_{t}"], check, "k"), "c_ci": widened(fin.ci[f"c_{t}"], check, "c"),
+            k, k_ci = reported(fin.params[f"k_{t}"], fin.ci[f"k_{t}"], check, "k")
+            c, c_ci = reported(fin.params[f"c_{t}"], fin.ci[f"c_{t}"], check, "c")
+            tires[t] = {"k": k, "c": c, "k_ci": k_ci, "c_ci": c_ci,
+                        "k_source": "free_decay" if check.get("prefer") else "joint_fit",
                         "effects": list(self.effects), "parameters": self.tire_parameters(t),
                         "nrmse_before": float(before[t]), "nrmse_after": float(after[t]),
                         "noise_nrmse": self.noise_nrmse(t), "unexplained": self.unexplained[t],

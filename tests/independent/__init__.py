@@ -1,7 +1,7 @@
 """An independent cleat-test simulator: recordings the pipeline has never seen the physics of.
 
 Nothing here imports ``identification``: the multibody dynamics and the integrator are Exudyn's
-(PyPI ``exudyn``, an engine nobody on this project wrote), the tire is a rigid circle over a bed of
+(PyPI ``exudyn``, a multibody engine from outside this project), the tire is a rigid circle over a bed of
 bristles whose footprint and enveloping emerge from its geometry, the cleat has bevels and rounded edges, and the
 acquisition chain is simulated as analog filters on a grid at least ten times the output rate.
 It is the only place accuracy and interval coverage of the pipeline are claimed from
