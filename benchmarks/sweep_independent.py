@@ -64,10 +64,14 @@ def generate(job) -> str:
     return str(stem)
 
 
+#: the checkout whose ``identification`` is analysed (``--code``; default: this one)
+CODE = ROOT
+
+
 def _cli(*args) -> tuple[int, dict | None, str, float]:
     t0 = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "identification.cli", *args], capture_output=True, text=True,
-                          cwd=ROOT)
+                          cwd=CODE)
     wall = time.perf_counter() - t0
     try:
         out = json.loads(proc.stdout) if proc.returncode == 0 else None
@@ -76,7 +80,9 @@ def _cli(*args) -> tuple[int, dict | None, str, float]:
     return proc.returncode, out, proc.stderr.strip(), wall
 
 
-def analyse(stem: str) -> dict:
+def analyse(job) -> dict:
+    global CODE
+    stem, CODE = job
     csv = stem + ".csv"
     truth = json.loads(Path(stem + ".truth.json").read_text())
     rc, diag, err, wall = _cli("diagnose", csv, "--json")
@@ -181,6 +187,8 @@ def main(argv=None):
     ap.add_argument("--cache", default="runs/independent", help="folder of the generated recordings")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--rows", help="also write the per-recording rows (JSON lines) here")
+    ap.add_argument("--code", default=str(ROOT),
+                    help="checkout whose commands are run (default: this one; another commit's, to compare)")
     ap.add_argument("--check", action="store_true",
                     help="exit 1 unless every recording has a result and no tire is declared at the noise floor "
                          "with k off by > 3 %% or c off by > 10 %% (the CI subset)")
@@ -194,7 +202,7 @@ def main(argv=None):
     print(f"generated {len(stems)} recordings in {time.perf_counter() - t0:.0f} s", flush=True)
     rows = []
     with ProcessPoolExecutor(args.workers) as pool:
-        for row in pool.map(analyse, stems):
+        for row in pool.map(analyse, [(s, str(Path(args.code).resolve())) for s in stems]):
             print(json.dumps(row, default=float), flush=True)
             rows.append(row)
     if args.rows:

@@ -138,6 +138,12 @@ def run(sc: Scenario) -> dict:
     crossing = cross_cleat(sc.vehicle, speed_m_s=v, cleats={"L": cleat, "R": cleat},
                            cleat_x_m={"L": x_left, "R": x_left + sc.stagger_m}, step_s=step,
                            duration_s=pre + duration + 0.01)
+    for w in WHEELS:   # the bristle bed must reach beyond every contact (the cleat's top under the lowest hub)
+        spec = sc.vehicle.tires[w]
+        if spec.kind == "bed":
+            drop = spec.radius_m + spec.lug_amplitude_m - (float(crossing.hub_z[w].min()) - sc.cleat_height_m)
+            if drop > 0 and math.sqrt(max(0.0, 2 * spec.radius_m * drop - drop ** 2)) >= spec.x_max_m:
+                raise ValueError(f"{w}: the contact reaches the bristle bed's end ({spec.x_max_m} m)")
     rng = np.random.default_rng([sc.seed, 1])
     accel, t = {}, None
     for w in WHEELS:

@@ -49,7 +49,7 @@ class TireSpec:
     lug_amplitude_m: float = 0.0
     lugs: int = 0
     dx_m: float = 0.005
-    x_max_m: float = 0.36
+    x_max_m: float = 0.55         # beyond any contact: a 50 mm cleat under the largest tire reaches 0.43 m
 
 
 def pack(spec: TireSpec) -> tuple[np.ndarray, np.ndarray]:
