@@ -1,8 +1,8 @@
 """The diagnosis against the free decay alone: never worse than the simple fit it extends.
 
 Where a hub rings as an independent corner (the diagnosis names no body coupling) with a linear tire
-(no friction, no progressive stiffness: the decay's shape is then the damped sinusoid), the waveform
-fit of its free decay (:func:`identification.waveform.identify_waveform`) gives k and c from the part
+(no friction, no progressive stiffness: the decay's shape is then the damped sinusoid, and the fit
+explains its window to R² >= :data:`MIN_DECAY_R2`), the waveform fit of its free decay (:func:`identification.waveform.identify_waveform`) gives k and c from the part
 of the record that needs the least of the model: the tire on flat ground.  The joint fit's k and c
 must agree with it within their joint 95 % interval, √(h_joint² + h_decay²) (h the half-widths).
 Where the joint fit's k or c lies outside the free decay's own 95 % interval, the joint fit was pulled
@@ -26,6 +26,9 @@ __all__ = ["free_decay_check", "reported", "BODY_EFFECTS", "SHAPE_EFFECTS"]
 
 #: Named, these make the free decay a body's mode, not the tire's.
 BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
+#: The waveform fit must explain its window to this R² to count as the free decay of a linear corner (below
+#: it: the tire still on the cleat, a progressive tire or a coupled body the diagnosis did not name).
+MIN_DECAY_R2 = 0.985
 #: Named, these make the decay's shape other than a damped sinusoid (a steady line rides on it).
 SHAPE_EFFECTS = ("friction_damping", "nonlinear_stiffness", "periodic_disturbance")
 
@@ -51,6 +54,10 @@ def free_decay_check(diag) -> dict:
             wave = identify_waveform(sig, rec.wheel_load_N[tire] / STANDARD_GRAVITY, source=rec.source)
         except InputError as exc:
             out[tire] = {"valid": False, "why_not": f"no waveform fit: {exc.problem}"}
+            continue
+        if not wave.r2 >= MIN_DECAY_R2:   # a forced response, a progressive or a coupled hub: no damped sinusoid
+            out[tire] = {"valid": False, "why_not": f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < "
+                                                    f"{MIN_DECAY_R2})"}
             continue
         fin = diag.final
         entry = {"valid": True, "why_not": None, "k": float(wave.k), "c": float(wave.c),
