@@ -141,8 +141,10 @@ def summary(rows) -> str:
     if halves:
         lines.append(f"median k half-width: {np.median(halves):.2%}")
     lost = [t for t in all_t if t.get("undetermined")]
-    lines.append(f"tires whose k is not determined (interval wider than +-50 %, counted as covering above): "
-                 f"{len(lost)} of {len(all_t)}; coverage without them: k {cov([t for t in all_t if t not in lost], 'k')}")
+    kept = [t for t in all_t if not t.get("undetermined")]
+    lines.append(f"tires whose k is not determined (interval wider than +-50 %; in the coverage above as their "
+                 f"intervals fall: {sum(t['k_in'] for t in lost)} hold the truth): {len(lost)} of {len(all_t)}; "
+                 f"coverage without them: k {cov(kept, 'k')}, c {cov(kept, 'c')}")
     lines.append(f"tires whose k and c are the free decay's (the joint fit outside its interval): "
                  f"{sum(t.get('source') == 'free_decay' for t in all_t)}")
     within = sum(all(abs(t["k_err"]) <= 0.03 and abs(t["c_err"]) <= 0.10 for t in r["tires"].values()) for r in ok)
