@@ -261,6 +261,8 @@ def measure_tractor_gain(diag, fmu_dir=None, *, stem: str | None = None, strict:
             after = diag.final.prediction
             final_note = (f"{exc.problem}; its NRMSE is the fitting model's, and its FMUs would not start in "
                           f"an importer either")
+            if diag.final.label == diag.baseline.label:   # the baseline is the final model: one warning
+                note = None
         kept = []
         if fmu_dir is not None and final_note is None:
             from ._files import publish_files

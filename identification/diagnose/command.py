@@ -139,10 +139,7 @@ def diagnosis_warnings(diag, gain) -> list[str]:
                    f"{refit['sidecar_m_s'] * 3.6:.3g} km/h "
                    f"({100 * (refit['from_delay_m_s'] / refit['sidecar_m_s'] - 1):+.1f} %): fitted again at the "
                    f"delay's speed")
-    if gain.note and gain.note != getattr(gain, "final_note", None):
-        out.append(gain.note)
-    if getattr(gain, "final_note", None):
-        out.append(gain.final_note)
+    out += [note for note in (gain.note, gain.final_note) if note]
     for check in (diag.extra.get("free_decay") or {}).values():
         if check.get("reason"):
             out.append(check["reason"])
@@ -233,7 +230,7 @@ def run(args) -> int:
             diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
         if gain.note:
             doc["nrmse_before_note"] = gain.note
-        if getattr(gain, "final_note", None):
+        if gain.final_note:
             doc["nrmse_after_note"] = gain.final_note
         if window_json(diag.problem.rec) is not None:    # the conditioning with the signs the fit chose
             doc["analysis_window"] = window_json(diag.problem.rec)

@@ -2,8 +2,9 @@
 
 Where a hub rings as an independent corner (the diagnosis names no body coupling) with a linear tire
 (no friction, no progressive stiffness: the decay's shape is then the damped sinusoid, and the fit
-explains its window to R² >= :data:`MIN_DECAY_R2`), the waveform fit of its free decay (:func:`identification.waveform.identify_waveform`) gives k and c from the part
-of the record that needs the least of the model: the tire on flat ground.  The joint fit's k and c
+explains its window to R² >= :data:`MIN_DECAY_R2`), the waveform fit of its free decay
+(:func:`identification.waveform.identify_waveform`) gives k and c from the part of the record that
+needs the least of the model: the tire on flat ground.  The joint fit's k and c
 must agree with it within their joint 95 % interval, √(h_joint² + h_decay²) (h the half-widths).
 Where the joint fit's k or c lies outside the free decay's own 95 % interval, the joint fit was pulled
 by what its model gets wrong in the impact (a cleat shape, a footprint, an acquisition chain): the
@@ -21,6 +22,7 @@ import math
 from ..errors import InputError
 from ..preprocess import preprocess
 from ..recording import STANDARD_GRAVITY
+from ..waveform import identify_waveform
 
 __all__ = ["free_decay_check", "reported", "BODY_EFFECTS", "SHAPE_EFFECTS"]
 
@@ -49,7 +51,6 @@ def free_decay_check(diag) -> dict:
                                                     f"linear tire's under a corner mass"}
             continue
         try:
-            from ..waveform import identify_waveform
             sig = preprocess(rec, [tire], cutoff_hz=pb.cutoff_hz, min_peaks=1)[tire]
             wave = identify_waveform(sig, rec.wheel_load_N[tire] / STANDARD_GRAVITY, source=rec.source)
         except InputError as exc:

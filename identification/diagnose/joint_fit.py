@@ -83,6 +83,14 @@ def correlation_lag(sample_rate_hz: float, cutoff_hz: float) -> int:
     return max(10, int(math.ceil(4.0 * sample_rate_hz / cutoff_hz)))
 
 
+def _autocovariance(r: np.ndarray) -> np.ndarray:
+    """Biased autocovariance of `r` about its mean at lags 0 .. len(r) - 1 (by FFT, zero-padded)."""
+    r = r - r.mean()
+    nfft = 1 << int(math.ceil(math.log2(2 * r.size)))
+    fr = np.fft.rfft(r, nfft)
+    return np.fft.irfft(fr * np.conj(fr), nfft)[: r.size] / r.size
+
+
 def residual_correlation_lag(residual: np.ndarray, sizes, floor: int, *, level: float = 0.1,
                              max_share: float = 0.25) -> int:
     """The lag (samples) beyond which every block's residual autocorrelation stays under `level`.
@@ -99,10 +107,7 @@ def residual_correlation_lag(residual: np.ndarray, sizes, floor: int, *, level: 
         row += size
         if size < 8:
             continue
-        r = r - r.mean()
-        nfft = 1 << int(math.ceil(math.log2(2 * size)))
-        fr = np.fft.rfft(r, nfft)
-        acov = np.fft.irfft(fr * np.conj(fr), nfft)[:size]
+        acov = _autocovariance(r)
         if acov[0] <= 0:
             continue
         above = np.flatnonzero(np.abs(acov[: max(2, int(max_share * size))] / acov[0]) > level)
@@ -139,11 +144,9 @@ def sandwich_covariance(jac: np.ndarray, residual: np.ndarray, sizes, max_lag: i
         row += size
         if size == 0:
             continue
-        r = r - r.mean()
         lag = min(max_lag, size - 1)
         nfft = 1 << int(math.ceil(math.log2(2 * size)))
-        fr = np.fft.rfft(r, nfft)
-        acov = np.fft.irfft(fr * np.conj(fr), nfft)[: lag + 1] / size
+        acov = _autocovariance(r)[: lag + 1]
         u = np.arange(lag + 1) / (lag + 1)
         parzen = np.where(u <= 0.5, 1 - 6 * u ** 2 + 6 * u ** 3, 2 * (1 - u) ** 3)
         kernel = np.zeros(nfft)
