@@ -213,7 +213,7 @@ def fake_diagnosis(monkeypatch):
         diag = SimpleNamespace(problem=SimpleNamespace(rec=rec), effects=[], extra={}, evidence={}, seconds=4.25,
                                to_json=lambda **kw: doc, tire_json=lambda tire, **kw: {"tire": tire})
         gain = SimpleNamespace(nrmse_before={}, nrmse_after={}, agreement=1e-9, fmu_paths=paths, seconds=1.5,
-                               note=None)
+                               note=None, final_note=None)
         return diag, gain
     monkeypatch.setattr(command, "run_tractor_diagnosis", run_tractor_diagnosis)
     monkeypatch.setattr(plots, "plot_tractor_diagnosis", lambda diag, **kw: "figure")
