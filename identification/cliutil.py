@@ -19,7 +19,7 @@ from pathlib import Path
 
 from .errors import InputError
 
-__all__ = ["choose_tire", "normalize_tire", "check_output", "check_folder", "make_folders", "OutputFolders",
+__all__ = ["announce_compilation", "choose_tire", "normalize_tire", "check_output", "check_folder", "make_folders", "OutputFolders",
            "write_files", "add_example_option", "read_recording_arg", "DefaultsHelpFormatter", "Parser"]
 
 #: The tire names of a cleat recording (:data:`identification.recording.TIRES`, repeated here so that the
@@ -28,6 +28,17 @@ _TIRES = ("FL", "FR", "RL", "RR")
 
 
 # ----------------------------------------------------------------------------- tires
+
+def announce_compilation() -> None:
+    """Say on stderr, before a command steps the model, that its compiled code is built first (once per
+    install: a first run takes some seconds longer, and nothing else would say why)."""
+    import sys
+
+    from .model.kernels import compiled_on_disk
+    if not compiled_on_disk():
+        print("cleatfmu: compiling the model's stepping code for this install (once; about 5-10 s)...",
+              file=sys.stderr, flush=True)
+
 
 def normalize_tire(name: str) -> str:
     """A tire name as the recordings spell it: ``"fl"`` -> ``"FL"`` (surrounding blanks dropped)."""

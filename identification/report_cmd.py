@@ -67,7 +67,10 @@ def _run(paths, out, *, title: str, command: str, workers: int | None, extra: di
         f"up to {workers or os.cpu_count() or 1} local process(es)"
     print(f"cleatfmu {command}: {len(paths)} recording(s) into {out}{os.sep} on {where}", flush=True)
     from .batch import run_batch
+    from .cliutil import announce_compilation
     from .report_html import write_report
+
+    announce_compilation()
 
     # run_batch creates `out` and its missing parents inside the command's OutputFolders block
     result = run_batch(paths, out, workers=workers, scheduler=scheduler)

@@ -17,7 +17,7 @@ import os
 import signal
 import sys
 
-__all__ = ["process_pool", "worker_init", "stop_pool"]
+__all__ = ["process_pool", "worker_init", "stop_pool", "one_blas_thread"]
 
 _PR_SET_PDEATHSIG = 1
 
@@ -37,6 +37,23 @@ def worker_init(parent_pid: int | None = None) -> None:
             os._exit(1)
     from threadpoolctl import threadpool_limits
     threadpool_limits(limits=1, user_api="blas")
+
+
+def one_blas_thread(fn):
+    """Decorator: `fn` runs with BLAS held to one thread in this process (then restored).
+
+    The fits multiply small matrices: BLAS threads gain nothing there and spin on the other core (seen:
+    a whole-tractor diagnosis with one worker, 18 s of CPU alone and 25 s with two BLAS threads, the
+    same wall time), and beside the pool's workers they oversubscribe the cores.
+    """
+    import functools
+
+    @functools.wraps(fn)
+    def held(*args, **kwargs):
+        from threadpoolctl import threadpool_limits
+        with threadpool_limits(limits=1, user_api="blas"):
+            return fn(*args, **kwargs)
+    return held
 
 
 def process_pool(workers: int):

@@ -54,3 +54,45 @@ def test_export_imports_neither_scipy_numba_matplotlib_nor_fmpy_beyond_the_packa
               if v.start is not None}
     assert starts["hub_z"] == 0.75 - mass * STANDARD_GRAVITY / k
     assert starts["stiffness"] == k
+
+
+def test_blas_is_held_to_one_thread_inside_the_diagnosis_and_restored_after():
+    from threadpoolctl import threadpool_info
+
+    from identification.workers import one_blas_thread
+
+    def blas_threads():
+        return [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+
+    before = blas_threads()
+    inside = one_blas_thread(blas_threads)()
+    assert inside and all(n == 1 for n in inside)
+    assert blas_threads() == before
+
+
+def test_a_first_run_says_it_compiles_and_a_second_does_not(tmp_path):
+    """An empty numba cache (a fresh install): the compiled kernel is not on disk, the command says so on
+    stderr before it steps the model; after one run it is cached and nothing is said."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    code = ("import sys; from identification.cliutil import announce_compilation; announce_compilation()\n"
+            "from identification.model.kernels import compiled_on_disk, run_model\n"
+            "from identification.diagnose.tractor import TractorFitModel, TractorProblem\n"
+            "from identification.recording import read_recording\n"
+            "from identification.examples import example_path\n"
+            "pb = TractorProblem.from_recording(read_recording(example_path('7kmh')))\n"
+            "m = TractorFitModel((), pb)\n"
+            "print(compiled_on_disk())\n")
+    first = subprocess.run([sys.executable, "-c", code + "m.simulate({n: 1.0 for n in m.names} | "
+                            "{f'k_{t}': 5e5 for t in pb.channels} | {f'c_{t}': 3e3 for t in pb.channels} | "
+                            "{'arrival': 1.0})\nprint(compiled_on_disk())"], env=env, capture_output=True,
+                           text=True, timeout=300)
+    assert first.returncode == 0, first.stderr
+    assert "compiling the model's stepping code" in first.stderr
+    assert first.stdout.split() == ["False", "True"]
+    second = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300)
+    assert second.returncode == 0, second.stderr
+    assert "compiling" not in second.stderr and second.stdout.split() == ["True"]

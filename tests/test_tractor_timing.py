@@ -68,3 +68,32 @@ def test_rear_k_twice_the_truth_misplaces_the_rear_arrivals_and_the_scaled_searc
         assert scaled["tires"][f"k_{t}"] == pytest.approx(tires[t]["k"], rel=0.15)
     for t in ("FL", "FR"):
         assert scaled["tires"][f"k_{t}"] == pytest.approx(tires[t]["k"], rel=0.3)
+
+
+def test_compiled_coarse_minimum_is_the_first_minimum_of_the_score_array():
+    """The search's compiled one-pass minimum against numpy's argmin (first occurrence) of the scores
+    written out over (stagger, delay, arrival), with ties, records' edges (-inf) and rows of no arrival."""
+    from identification.diagnose.joint_timing import _coarse_min, _coarse_min_arrays
+
+    rng = np.random.default_rng(3)
+    for trial in range(40):
+        s, d, i = rng.integers(1, 7, size=3)
+        front = rng.integers(-3, 4, size=(s, i)).astype(float)     # integers: ties are common
+        back = rng.integers(-3, 4, size=(s, d + i - 1)).astype(float)
+        back[rng.random(back.shape) < 0.2] = -np.inf
+        crossed = rng.integers(-2, 3, size=(s, d)).astype(float)
+        if trial == 0:
+            back[:] = -np.inf                                       # nothing inside the record
+        scores = np.full((s, d, i), np.nan)
+        for a in range(s):
+            for b in range(d):
+                for c in range(i):
+                    scores[a, b, c] = 10.0 + crossed[a, b] - 2 * (front[a, c] + back[a, b + c])
+        j = int(np.argmin(scores))
+        expect = (float(scores.flat[j]),) + tuple(int(k) for k in np.unravel_index(j, scores.shape))
+        got = _coarse_min(10.0, crossed, front, back)
+        if not math.isfinite(expect[0]):
+            assert math.isinf(got[0]) and math.isinf(_coarse_min_arrays(10.0, crossed, front, back)[0])
+            continue
+        assert tuple(got) == expect
+        assert _coarse_min_arrays(10.0, crossed, front, back) == expect

@@ -87,6 +87,8 @@ def run(args) -> int:
 
     if args.seat_x_m is not None and not -1.0 <= args.seat_x_m <= rec.wheelbase_m + 1.0:
         raise InputError("--seat-x-m", f"the seat must be on the tractor (-1 .. wheelbase + 1 m), got {args.seat_x_m:g}")
+    from ..cliutil import announce_compilation
+    announce_compilation()
     runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
                                 speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
                                 duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,

@@ -7,8 +7,8 @@ import os
 import sys
 import time
 
-from ..cliutil import (add_example_option, check_folder, check_output, choose_tire, read_recording_arg,
-                       write_files)
+from ..cliutil import (add_example_option, announce_compilation, check_folder, check_output, choose_tire,
+                       read_recording_arg, write_files)
 from ..errors import InputError
 from ..preprocess import DEFAULT_CUTOFF_HZ
 
@@ -205,6 +205,7 @@ def run(args) -> int:
     rec = decimate(focus(rec, cutoff_hz=args.cutoff_hz), cutoff_hz=args.cutoff_hz)
     long = long or rec.decimated_from_hz is not None
     keep_fmus = args.fmu is not None or args.fmu_dir is not None
+    announce_compilation()
     tick, bar = _progress(f"diagnose {tire or 'tractor'}", long=long)
     with tempfile.TemporaryDirectory(prefix="cleatfmu_fmus_") as tmp:
         try:

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..recording import FRONT_TIRES
+from ..workers import one_blas_thread
 from .joint_evidence import check_tractor
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
 from .joint_start import (ENVELOPE_GUESS_M, body_start, enveloped_timings, refine_timing, rescue_start,
@@ -234,6 +235,7 @@ def _judge(cand, current_sse, current_p, n, n_eff):
     return TractorCandidate(cand.effect, fit, float(dbic), float(gain), cand.passed_gate, qualified, cand.evidence)
 
 
+@one_blas_thread
 def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress=None, workers: int = 1,
                      channels=None) -> TractorDiagnosis:
     """Diagnose every channel of a recording jointly under one body.

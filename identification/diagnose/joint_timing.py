@@ -121,6 +121,36 @@ def _responses(model: TractorFitModel, theta: dict, index: int, before: int, len
     return out
 
 
+def _coarse_min(energy, crossed, front, back):
+    """The first minimum, in (stagger, delay, arrival) order, of the coarse scores
+    ``energy + crossed[s, d] - 2 (front[s, i] + back[s, d + i])``: (score, s, d, i) indices, score inf if none
+    is finite.  Compiled with numba (one pass, no temporaries; the same operations as the array form)."""
+    best, bs, bd, bi = math.inf, 0, 0, 0
+    for s in range(front.shape[0]):
+        for d in range(crossed.shape[1]):
+            base = energy + crossed[s, d]
+            for i in range(front.shape[1]):
+                v = base - 2 * (front[s, i] + back[s, d + i])
+                if v < best:
+                    best, bs, bd, bi = v, s, d, i
+    return best, bs, bd, bi
+
+
+def _coarse_min_arrays(energy, crossed, front, back):
+    """:func:`_coarse_min` with numpy arrays (without numba)."""
+    pos = np.arange(crossed.shape[1])[:, None] + np.arange(front.shape[1])[None, :]
+    sc = energy + crossed[:, :, None] - 2 * (front[:, None, :] + back[:, pos])
+    j = int(np.argmin(np.where(np.isnan(sc), np.inf, sc)))
+    return (float(sc.flat[j]),) + tuple(int(k) for k in np.unravel_index(j, sc.shape))
+
+
+try:
+    import numba
+    _coarse_min = numba.njit(cache=True)(_coarse_min)
+except ImportError:   # pragma: no cover - numba is a dependency
+    _coarse_min = _coarse_min_arrays
+
+
 def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None) -> tuple[float, int, int, int]:
     """Best (score, first arrival index, stagger, delay in samples) for responses `H`; with `near`
     ((arrival, stagger, delay) in samples, (arrival, stagger, delay) half-widths in samples) only there."""
@@ -181,18 +211,21 @@ def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None) -> tuple[
     i_range = np.arange(max(0, lo_hi[0][0]), min(n, lo_hi[0][1] + 1), step)
     s_range = np.arange(lo_hi[1][0], lo_hi[1][1] + 1, step) if pb.both_sides else np.zeros(1, int)
     d_range = np.arange(lo_hi[2][0], lo_hi[2][1] + 1, step) if pb.both_axles else np.zeros(1, int)
-    every = np.arange(-n, n)   # the rear arrivals, i + d, as indices into `back` (offset n)
+    # every stagger at once, scores[s, d, i] (the per-stagger loop's operations in its order, so the first
+    # minimum in (stagger, delay, arrival) order is the same).  Arrival and delay share the coarse step, so
+    # the rear arrivals i + d lie on one lattice, lattice[ii + di]: the rear terms are gathered there only.
+    shifted = s_range[:, None]
+    front = sum((at(w, i_range[None, :] + right[w] * shifted) for w in range(m) if not rear[w]),
+                np.zeros((s_range.size, i_range.size)))
+    lattice = i_range[0] + d_range[0] + step * np.arange(i_range.size + d_range.size - 1)
+    back = sum((at(w, np.minimum(lattice, n)[None, :] + right[w] * shifted) for w in range(m) if rear[w]),
+               np.zeros((s_range.size, lattice.size)))
+    back[:, lattice >= n] = -np.inf                                      # beyond the record
+    crossed = cross_at(s_range[:, None], d_range[None, :])               # (stagger, delay)
+    value, si, di, ii = _coarse_min(float(energy), crossed, front, back)
     best = (math.inf, 0, 0, 0)
-    for s in s_range:
-        front = sum((at(w, i_range + right[w] * s) for w in range(m) if not rear[w]), np.zeros(i_range.size))
-        back = np.append(sum((at(w, every + right[w] * s) for w in range(m) if rear[w]), np.zeros(2 * n)),
-                         -np.inf)
-        idx = np.minimum(i_range[None, :] + d_range[:, None] + n, 2 * n)   # beyond the record: -inf
-        sc = energy + cross_at(s, d_range)[:, None] - 2 * (front[None, :] + back[idx])
-        j = int(np.argmin(sc))
-        if sc.flat[j] < best[0]:
-            di, ii = np.unravel_index(j, sc.shape)
-            best = (float(sc.flat[j]), int(i_range[ii]), int(s), int(d_range[di]))
+    if math.isfinite(value):
+        best = (float(value), int(i_range[ii]), int(s_range[si]), int(d_range[di]))
     # refine at the sampling grid
     _, i0, s0, d0 = best
     around = np.arange(-step, step + 1)

@@ -31,7 +31,7 @@ import numpy as np
 from ..errors import InputError
 from ..identify import identify_paper
 from ..waveform import identify_waveform
-from ..workers import process_pool, stop_pool
+from ..workers import one_blas_thread, process_pool, stop_pool
 from .evidence import check
 from .fit import Fit, fit_model, scan_arrival, sse_at
 from .models import EFFECTS, PARAMETERS, Model, Problem
@@ -192,6 +192,7 @@ def _judge(cand: Candidate, current_sse: float, current_p: int, n: int, n_eff: f
     return Candidate(cand.effect, fit, float(dbic), float(gain), cand.passed_gate, qualified, cand.evidence)
 
 
+@one_blas_thread
 def diagnose(rec, tire: str, *, cutoff_hz: float = 100.0, progress=None, effects=EFFECTS,
              workers: int = 1) -> Diagnosis:
     """Diagnose one tire of a recording.

@@ -18,7 +18,7 @@ from ..scheme import Trajectory
 from .stepping import prepared, trajectory_from_arrays
 from .tractor import TractorModel
 
-__all__ = ["run_model", "available"]
+__all__ = ["run_model", "available", "compiled_on_disk"]
 
 def _compiled(fn, helpers: dict, inline: str = "never"):
     """`fn` compiled by numba, its calls to the module-level `helpers` (name: compiled function) resolved to
@@ -165,6 +165,17 @@ def drop_stale_cache(stem: str, tag: str, dependency) -> None:
 if numba is not None:
     drop_stale_cache("kernels", "law", tire_law)
     _step = numba.njit(cache=True, fastmath=False)(_step)
+
+
+def compiled_on_disk() -> bool:
+    """Whether the stepping kernel's compilation is cached on disk for this source (a first run after an
+    install or a change compiles it, some seconds); True when it cannot be told."""
+    if numba is None:   # pragma: no cover
+        return True
+    try:
+        return bool(_step._cache._cache_file._load_index())   # numba keeps no public handle on its cache
+    except Exception:   # pragma: no cover - another numba's internals: nothing to announce
+        return True
 
 
 def run_model(model: TractorModel, start_s: float, step_s: float, n: int) -> Trajectory:
