@@ -9,7 +9,7 @@ fmpy).  Run: ``python benchmarks/bench_diagnose.py``.
 import statistics
 import time
 
-from identification.diagnose.command import run_diagnosis
+from identification.diagnose.run import run_diagnosis
 from identification.rig import run_rig
 
 CASES = [((), "FL"), (("enveloping",), "FL"), (("lift_off",), "FL"), (("axle_coupling",), "RL"),

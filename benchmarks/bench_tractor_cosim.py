@@ -42,7 +42,7 @@ import numpy as np
 from build_scripts import build_fmu
 from identification import tractor_cosim
 from identification.cosim import TireFmu, step_fn
-from identification.diagnose.command import run_tractor_diagnosis
+from identification.diagnose.run import run_tractor_diagnosis
 from identification.recording import read_recording
 from identification.rig import run_rig, write_run
 from identification.tractor_cosim import simulate_tractor

@@ -64,7 +64,7 @@ def draw(artifact: str, rng: np.random.Generator) -> dict:
 
 def one(job: tuple) -> dict:
     """Run one draw; a JSON-ready summary."""
-    from identification.diagnose.command import run_tractor_diagnosis
+    from identification.diagnose.run import run_tractor_diagnosis
     from identification.errors import InputError
     from identification.graceful import Refusal, identify_channels
     from identification.rig.generate import run_rig

@@ -201,7 +201,7 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
 
 def diagnose_recording(csv_path: str, stem: str, out_dir: str) -> DiagnosisReport:
     """Diagnose every channel of a recording jointly; keep one extended FMU per tire (in a worker process)."""
-    from .diagnose.command import diagnosis_warnings, run_tractor_diagnosis
+    from .diagnose.run import diagnosis_warnings, run_tractor_diagnosis
     from .plots import plot_impact_zooms, plot_tractor_diagnosis, png_bytes
     from .recording import read_recording
 

@@ -151,7 +151,7 @@ def test_the_built_in_cleat_of_a_profile():
 def test_the_tractor_diagnosis_rides_a_bevelled_cleat():
     """A 15 mm bevel at 10 km/h on the rigid tractor with no effect: the joint fit over the profile finds every
     k within 1 % and c within 3 % and names nothing (over a rectangle: c up to 7 % off, measured)."""
-    from identification.diagnose.command import run_tractor_diagnosis
+    from identification.diagnose.run import run_tractor_diagnosis
 
     run = run_rig((), {"cleat.bevel_m": 0.015, "speed_kmh": 10.0, "cleat.stagger_m": 0.027}, seed=0)
     diag, gain = run_tractor_diagnosis(run.recording)

@@ -325,3 +325,13 @@ def test_diagnose_timings_only_with_verbose(cli, fake_diagnosis):
     loud = cli("diagnose", "--example", "7kmh", "-v")
     assert quiet.code == loud.code == 0, (quiet.err, loud.err)
     assert "s diagnosis" not in quiet.out and "4.2 s diagnosis, 1.5 s FMU gain check" in loud.out
+
+
+def test_tractor_text_says_not_determined_instead_of_printing_huge_bounds():
+    from identification.diagnose.command import _interval
+
+    assert _interval(480e3, (470e3, 490e3), 1e3, ".1f") == "(470.0-490.0)"
+    assert _interval(480e3, (1e-3, 1e300), 1e3, ".1f") == "(not determined by the data)"
+    assert _interval(480e3, (0.0, float("inf")), 1e3, ".1f") == "(not determined by the data)"
+    assert _interval(2e3, (0.5e3, 4.2e3), 1e3, ".3f") == "(not determined by the data)"   # half-width 1.85 > 1
+    assert _interval(2e3, (1.2e3, 2.9e3), 1e3, ".3f") == "(1.200-2.900)"                  # half-width 0.85

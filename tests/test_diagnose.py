@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from identification.diagnose.command import run_diagnosis
+from identification.diagnose.run import run_diagnosis
 from identification.rig import run_rig, write_run
 
 EFFECTS = ("enveloping", "lift_off", "axle_coupling", "nonlinear_stiffness", "friction_damping",

@@ -10,9 +10,9 @@ import time
 from ..cliutil import (add_example_option, announce_compilation, check_folder, check_output, choose_tire,
                        read_recording_arg, write_files)
 from ..errors import InputError
-from ..preprocess import DEFAULT_CUTOFF_HZ
+from .run import diagnosis_warnings, run_tractor_diagnosis
 
-__all__ = ["add_parser", "run_diagnosis", "run_tractor_diagnosis"]
+__all__ = ["add_parser", "run"]
 
 
 class _Lines:
@@ -53,97 +53,19 @@ def _is_terminal(stream) -> bool:
         return False
 
 
-def run_diagnosis(rec, tire: str, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_path=None, workers: int = 1,
-                  progress=None):
-    """Diagnose one tire and measure the gain with the FMUs: (Diagnosis, GainCheck)."""
-    from .fmu import measure_gain
-    from .select import diagnose
-
-    diag = diagnose(rec, tire, cutoff_hz=cutoff_hz, workers=workers, progress=progress)
-    if progress is not None:
-        progress("FMU co-simulation")
-    try:
-        gain = measure_gain(diag, fmu_path)
-    except OSError as exc:
-        raise InputError(fmu_path, f"cannot write: {exc.strerror or exc}") from None
-    return diag, gain
+#: A 95 % interval whose half-width exceeds this share of the value says the data do not determine it.
+UNDETERMINED_SHARE = 0.5
 
 
-def _text(diag, gain) -> str:
-    fin = diag.final
-    lines = [f"{diag.tire} of {diag.problem.rec.source}: effects the point-contact model misses: "
-             f"{', '.join(diag.effects) or 'none (the baseline explains the data to within noise)'}"]
-    for effect in diag.effects:
-        lines.append(f"  {effect}: {diag.evidence.get(effect, '')}")
-    lines.append(f"  NRMSE (FMU co-simulation with fmpy): point contact {gain.nrmse_before:.2%} -> "
-                 f"extended {gain.nrmse_after:.2%}   (fitting model and FMU agree to {gain.agreement:.1e})")
-    k_lo, k_hi = fin.ci["k"]
-    c_lo, c_hi = fin.ci["c"]
-    lines.append(f"  k {fin.params['k'] / 1e3:.2f} kN/m ({k_lo / 1e3:.2f}-{k_hi / 1e3:.2f})   "
-                 f"c {fin.params['c'] / 1e3:.3f} kN s/m ({c_lo / 1e3:.3f}-{c_hi / 1e3:.3f})   [95 %]")
-    from .models import PARAMETERS
-    for name in fin.model.names:
-        if name in ("k", "c"):
-            continue
-        lo, hi = fin.ci[name]
-        lines.append(f"  {name:<16}{fin.params[name]:12.5g} {PARAMETERS[name][0]:<6} ({lo:.5g} .. {hi:.5g})")
-    timing = ", ".join(f"{label} {sec:.2f} s" for label, sec in diag.timings().items())
-    lines.append(f"  time: {diag.seconds:.1f} s diagnosis ({timing}); {gain.seconds:.1f} s FMU gain check")
-    return "\n".join(lines)
+def _interval(value: float, ci, scale: float, fmt: str) -> str:
+    """``(low-high)`` in the display unit, or ``(not determined by the data)`` when the 95 % interval's
+    half-width exceeds :data:`UNDETERMINED_SHARE` of the value (its bounds are then no usable number)."""
+    import math
 
-
-def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=None, stem: str | None = None,
-                          workers: int = 1, progress=None, strict: bool = True):
-    """Diagnose every channel jointly and measure the gain with one FMU per tire: (TractorDiagnosis, TractorGain).
-
-    With `fmu_dir` the extended FMUs are kept there as ``<stem>_<TIRE>.fmu`` (`stem`: the recording's); FMUs
-    that cannot start are then an error unless `strict` is off (then none is kept, and a warning says why).
-    """
-    from ..tractor_cosim import measure_tractor_gain
-    from .joint_select import diagnose_tractor
-
-    diag = diagnose_tractor(rec, cutoff_hz=cutoff_hz, workers=workers, progress=progress)
-    if progress is not None:
-        progress("FMU co-simulation")
-    try:
-        gain = measure_tractor_gain(diag, fmu_dir, stem=stem, strict=strict)
-    except OSError as exc:
-        raise InputError(fmu_dir, f"cannot write: {exc.strerror or exc}") from None
-    return diag, gain
-
-
-def diagnosis_warnings(diag, gain) -> list[str]:
-    """What the diagnosis itself has to warn of (one sentence each): a cleat profile its footprint models
-    approximate, the sensor signs it settled, a refit at the fitted delay's speed, a baseline whose FMUs
-    could not start.  The conditioning's warnings come
-    before it (:func:`identification.window.focus`)."""
-    from .joint_signs import AS_RECORDED
-
-    out = []
-    profile = diag.problem.rec.cleat_profile
-    if profile is not None and not profile.builtin_exact:
-        out.append(f"a footprint model carries the cleat_profile as the trapezoid of the same height, width and "
-                   f"area (bevel {profile.builtin_bevel_m * 1e3:.3g} mm); the point-contact models ride the "
-                   f"profile itself")
-    signs = diag.extra.get("sign_test")
-    if signs and "chosen" in signs:
-        what = "every sensor as recorded (a pivoting axle or a carried impact)" if signs["chosen"] == AS_RECORDED \
-            else f"{signs['chosen']} reads upside down (sign corrected)"
-        out.append(f"the signs of {'/'.join(signs['open'])} tested in the joint fit: {what}, by a BIC margin of "
-                   f"{signs['margin']:.1f} over the next hypothesis")
-    elif signs:
-        out.append(f"the signs of {'/'.join(signs['open'])} not tested: {signs['skipped']}")
-    refit = diag.extra.get("speed_refit")
-    if refit:
-        out.append(f"the fitted front/rear delay gives {refit['from_delay_m_s'] * 3.6:.3g} km/h, the sidecar "
-                   f"{refit['sidecar_m_s'] * 3.6:.3g} km/h "
-                   f"({100 * (refit['from_delay_m_s'] / refit['sidecar_m_s'] - 1):+.1f} %): fitted again at the "
-                   f"delay's speed")
-    out += [note for note in (gain.note, gain.final_note) if note]
-    for check in (diag.extra.get("free_decay") or {}).values():
-        if check.get("reason"):
-            out.append(check["reason"])
-    return out
+    lo, hi = ci
+    if not (math.isfinite(lo) and math.isfinite(hi)) or (hi - lo) / 2 > UNDETERMINED_SHARE * abs(value):
+        return "(not determined by the data)"
+    return f"({lo / scale:{fmt}}-{hi / scale:{fmt}})"
 
 
 def _tractor_text(diag, gain, verbose: bool = False) -> str:
@@ -169,8 +91,8 @@ def _tractor_text(diag, gain, verbose: bool = False) -> str:
         left = t["unexplained"]
         flag = (f"UNEXPLAINED {left['share']:.1%} of the signal in {left['window'][0]:.3f}-{left['window'][1]:.3f} s"
                 if left else "residual at the noise floor")
-        lines.append(f"  {tire}: k {t['k'] / 1e3:.1f} kN/m ({t['k_ci'][0] / 1e3:.1f}-{t['k_ci'][1] / 1e3:.1f})  "
-                     f"c {t['c'] / 1e3:.3f} kN s/m ({t['c_ci'][0] / 1e3:.3f}-{t['c_ci'][1] / 1e3:.3f})  "
+        lines.append(f"  {tire}: k {t['k'] / 1e3:.1f} kN/m {_interval(t['k'], t['k_ci'], 1e3, '.1f')}  "
+                     f"c {t['c'] / 1e3:.3f} kN s/m {_interval(t['c'], t['c_ci'], 1e3, '.3f')}  "
                      f"NRMSE {t['nrmse_before']:.1%} -> {t['nrmse_after']:.1%} (noise {t['noise_nrmse']:.1%}): {flag}")
     lines.append(f"  95 % intervals: {doc['intervals']}")
     check = "the final model's FMUs cannot start (see the warning)" if gain.agreement is None else \

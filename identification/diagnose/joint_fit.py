@@ -32,6 +32,7 @@ from scipy import optimize, stats
 
 from ..waveform import long_run_variance_ratio
 from .fit import _exp
+from .joint_jacobian import FAILED, GroupedJacobian, channel_dependence, column_groups
 from .tractor import SIGNED, TractorFitModel
 
 __all__ = ["TractorFit", "fit_tractor", "sse_of", "unexplained", "sandwich_covariance", "correlation_lag",
@@ -238,13 +239,20 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
         try:
             pred = model.predict(theta_of(x), step_s=step_s)
         except (ValueError, OverflowError, ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError):
-            return np.full(meas.size, 1e6)
+            return np.full(meas.size, FAILED)
         r = (np.concatenate([pred[c][w] for c in pb.channels]) - meas) / scale
-        return np.where(np.isfinite(r), r, 1e6)
+        return np.where(np.isfinite(r), r, FAILED)
 
     diff = np.array([1e-4 if lg else _DIFF_STEP.get(n.rsplit("_", 1)[0] if n not in _DIFF_STEP else n, 1e-4)
                      for n, lg in zip(free, logs)])
-    if free:
+    dependence = channel_dependence(model, free) if free else None
+    if free and dependence is not None and len(column_groups(dependence)) < len(free):
+        # independent tires: their columns differenced together, the same Jacobian from fewer runs
+        grouped = GroupedJacobian(residual, diff, dependence, int(w.sum()))
+        sol = optimize.least_squares(grouped.value, x0, jac=grouped, method="lm",
+                                     max_nfev=max(3, budget // (len(free) + 1)))
+        x, jac, fun = sol.x, sol.jac, sol.fun
+    elif free:
         sol = optimize.least_squares(residual, x0, method="lm", diff_step=diff,
                                      max_nfev=max(3, budget // (len(free) + 1)))
         x, jac, fun = sol.x, sol.jac, sol.fun

@@ -1,0 +1,79 @@
+"""A diagnosis with its gain measured by co-simulating the extended FMUs: the Python API under ``cleatfmu
+diagnose`` (and the batch's), and what the diagnosis has to warn of."""
+
+from __future__ import annotations
+
+from ..errors import InputError
+from ..preprocess import DEFAULT_CUTOFF_HZ
+
+__all__ = ["run_diagnosis", "run_tractor_diagnosis", "diagnosis_warnings"]
+
+
+def run_diagnosis(rec, tire: str, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_path=None, workers: int = 1,
+                  progress=None):
+    """Diagnose one tire and measure the gain with the FMUs: (Diagnosis, GainCheck)."""
+    from .fmu import measure_gain
+    from .select import diagnose
+
+    diag = diagnose(rec, tire, cutoff_hz=cutoff_hz, workers=workers, progress=progress)
+    if progress is not None:
+        progress("FMU co-simulation")
+    try:
+        gain = measure_gain(diag, fmu_path)
+    except OSError as exc:
+        raise InputError(fmu_path, f"cannot write: {exc.strerror or exc}") from None
+    return diag, gain
+
+
+def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=None, stem: str | None = None,
+                          workers: int = 1, progress=None, strict: bool = True):
+    """Diagnose every channel jointly and measure the gain with one FMU per tire: (TractorDiagnosis, TractorGain).
+
+    With `fmu_dir` the extended FMUs are kept there as ``<stem>_<TIRE>.fmu`` (`stem`: the recording's); FMUs
+    that cannot start are then an error unless `strict` is off (then none is kept, and a warning says why).
+    """
+    from ..tractor_cosim import measure_tractor_gain
+    from .joint_select import diagnose_tractor
+
+    diag = diagnose_tractor(rec, cutoff_hz=cutoff_hz, workers=workers, progress=progress)
+    if progress is not None:
+        progress("FMU co-simulation")
+    try:
+        gain = measure_tractor_gain(diag, fmu_dir, stem=stem, strict=strict)
+    except OSError as exc:
+        raise InputError(fmu_dir, f"cannot write: {exc.strerror or exc}") from None
+    return diag, gain
+
+
+def diagnosis_warnings(diag, gain) -> list[str]:
+    """What the diagnosis itself has to warn of (one sentence each): a cleat profile its footprint models
+    approximate, the sensor signs it settled, a refit at the fitted delay's speed, a baseline whose FMUs
+    could not start.  The conditioning's warnings come
+    before it (:func:`identification.window.focus`)."""
+    from .joint_signs import AS_RECORDED
+
+    out = []
+    profile = diag.problem.rec.cleat_profile
+    if profile is not None and not profile.builtin_exact:
+        out.append(f"a footprint model carries the cleat_profile as the trapezoid of the same height, width and "
+                   f"area (bevel {profile.builtin_bevel_m * 1e3:.3g} mm); the point-contact models ride the "
+                   f"profile itself")
+    signs = diag.extra.get("sign_test")
+    if signs and "chosen" in signs:
+        what = "every sensor as recorded (a pivoting axle or a carried impact)" if signs["chosen"] == AS_RECORDED \
+            else f"{signs['chosen']} reads upside down (sign corrected)"
+        out.append(f"the signs of {'/'.join(signs['open'])} tested in the joint fit: {what}, by a BIC margin of "
+                   f"{signs['margin']:.1f} over the next hypothesis")
+    elif signs:
+        out.append(f"the signs of {'/'.join(signs['open'])} not tested: {signs['skipped']}")
+    refit = diag.extra.get("speed_refit")
+    if refit:
+        out.append(f"the fitted front/rear delay gives {refit['from_delay_m_s'] * 3.6:.3g} km/h, the sidecar "
+                   f"{refit['sidecar_m_s'] * 3.6:.3g} km/h "
+                   f"({100 * (refit['from_delay_m_s'] / refit['sidecar_m_s'] - 1):+.1f} %): fitted again at the "
+                   f"delay's speed")
+    out += [note for note in (gain.note, gain.final_note) if note]
+    for check in (diag.extra.get("free_decay") or {}).values():
+        if check.get("reason"):
+            out.append(check["reason"])
+    return out

@@ -1,0 +1,42 @@
+"""The package's layering, held by import-linter contracts (``[tool.importlinter]`` in pyproject.toml).
+
+* the independent recording generator (``tests/independent``) imports nothing of the package: accuracy and
+  coverage measured on its recordings are not measured against the fitter's own physics;
+* the stages comfort -> diagnose -> model import only downwards;
+* the pipeline never imports the virtual rig;
+* only the command line imports the command modules (the stages are a Python API under them).
+"""
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+LINT = [sys.executable, "-c", "import sys; from importlinter.cli import lint_imports_command; "
+                              "sys.exit(lint_imports_command())"]
+
+
+def _lint(cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run(LINT + ["--no-cache"], cwd=cwd, capture_output=True, text=True, timeout=300,
+                          env={"PYTHONPATH": str(cwd), "PATH": ""})
+
+
+def test_every_layering_contract_is_kept():
+    proc = _lint(ROOT)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
+    assert "4 kept, 0 broken" in proc.stdout
+
+
+def test_a_generator_module_importing_the_package_breaks_its_contract(tmp_path):
+    """The contracts bite: the same configuration over a copy of the generator with one module that imports
+    the package's tire law."""
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    (tmp_path / "identification").symlink_to(ROOT / "identification")
+    shutil.copytree(ROOT / "tests" / "independent", tmp_path / "tests" / "independent",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    (tmp_path / "tests" / "independent" / "borrowed.py").write_text("from identification.tire_law import *\n")
+    proc = _lint(tmp_path)
+    assert proc.returncode == 1
+    assert "The independent recording generator shares no code with the package BROKEN" in proc.stdout
+    assert "tests.independent.borrowed -> identification.tire_law" in proc.stdout
