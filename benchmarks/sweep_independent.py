@@ -146,7 +146,9 @@ def summary(rows) -> str:
                  f"intervals fall: {sum(t['k_in'] for t in lost)} hold the truth): {len(lost)} of {len(all_t)}; "
                  f"coverage without them: k {cov(kept, 'k')}, c {cov(kept, 'c')}")
     lines.append(f"tires whose k and c are the free decay's (the joint fit outside its interval): "
-                 f"{sum(t.get('source') == 'free_decay' for t in all_t)}")
+                 f"{sum(t.get('source') == 'free_decay' for t in all_t)}; the channel's own fit's (the joint fit "
+                 f"collapsed): {sum(t.get('source') == 'channel_fit' for t in all_t)}")
+    lines.append(f"tires with k off by more than 50 %: {sum(abs(t['k_err']) > 0.5 for t in all_t)} of {len(all_t)}")
     within = sum(all(abs(t["k_err"]) <= 0.03 and abs(t["c_err"]) <= 0.10 for t in r["tires"].values()) for r in ok)
     lines.append(f"recordings with every k within 3 % and c within 10 %: {within} of {n} ({within / max(n, 1):.0%})")
     false_quiet = [(r["recording"], w) for r in ok for w, t in r["tires"].items()

@@ -13,6 +13,13 @@ own in ``parameters``, as its FMUs carry them), each interval the free decay's s
 joint fit's estimate too, and a warning says so, by how much (and in joint half-widths where the two
 intervals do not even overlap so far).  The tire's values are never further from the free decay
 than its interval allows.
+
+A joint fit that leaves a tire's k or c outside the range it searches around its start (the final
+model's bounds: k within 0.2-5x, c within 1e-3-5x + 2 kN s/m; seen: k -> 0 on rigid tractors with lugs or
+friction the model does not know) has collapsed: that is no measurement.  The tire's k and c are then
+the channel's own fit's (:func:`~identification.diagnose.joint_start.tire_start`: the waveform fit, the
+paper's method or the ringing frequency), ``"k_source": "channel_fit"``, each interval the whole range
+searched around it (the data do not narrow it), and a warning says so with the residual left.
 """
 
 from __future__ import annotations
@@ -24,7 +31,7 @@ from ..preprocess import preprocess
 from ..recording import STANDARD_GRAVITY
 from ..waveform import identify_waveform
 
-__all__ = ["free_decay_check", "reported", "BODY_EFFECTS", "SHAPE_EFFECTS"]
+__all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS"]
 
 #: Named, these make the free decay a body's mode, not the tire's.
 BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
@@ -46,6 +53,9 @@ def free_decay_check(diag) -> dict:
     out = {}
     named = [e for e in diag.effects if e in BODY_EFFECTS + SHAPE_EFFECTS]
     for tire in pb.channels:
+        if collapsed(diag, tire):
+            out[tire] = _channel_fit_instead(diag, tire)
+            continue
         if named:
             out[tire] = {"valid": False, "why_not": f"{', '.join(named)} named: the free decay is not a "
                                                     f"linear tire's under a corner mass"}
@@ -94,10 +104,47 @@ def free_decay_check(diag) -> dict:
     return out
 
 
+def collapsed(diag, tire: str) -> bool:
+    """Whether the joint fit left the tire's k or c outside the range it searched around its start (the final
+    model's bounds)."""
+    fin, start = diag.final, diag.extra.get("start") or {}
+    names = (f"k_{tire}", f"c_{tire}")
+    if not all(n in start and n in fin.params for n in names):
+        return False
+    lo, hi = fin.model.bounds({**fin.params, **{n: start[n] for n in names}})
+    return any(not lo[n] <= fin.params[n] <= hi[n] for n in names)
+
+
+def _channel_fit_instead(diag, tire: str) -> dict:
+    """The check's entry of a collapsed tire: the channel's own fit, each interval the range searched."""
+    from .joint_start import tire_start
+
+    fin = diag.final
+    k, c = tire_start(diag.problem, tire)
+    lo, hi = fin.model.bounds({**fin.params, f"k_{tire}": k, f"c_{tire}": c})
+    entry = {"valid": False, "why_not": "the joint fit collapsed", "collapsed": True, "prefer": True,
+             "agree": False, "k": float(k), "c": float(c), "k_ci": [float(lo[f"k_{tire}"]), float(hi[f"k_{tire}"])],
+             "c_ci": [float(lo[f"c_{tire}"]), float(hi[f"c_{tire}"])]}
+    left = diag.unexplained.get(tire)
+    residual = (f"it leaves {left['residual_to_noise']:.1f}x the noise" if left else
+                "its residual is at the noise floor")
+    entry["reason"] = (
+        f"{tire}: the joint fit collapsed (k {fin.params[f'k_{tire}'] / 1e3:.3g} kN/m, c "
+        f"{fin.params[f'c_{tire}'] / 1e3:.3g} kN s/m, outside the {entry['k_ci'][0] / 1e3:.0f}-"
+        f"{entry['k_ci'][1] / 1e3:.0f} kN/m and {entry['c_ci'][0] / 1e3:.3g}-{entry['c_ci'][1] / 1e3:.3g} kN s/m "
+        f"it searches): the model does not explain this channel ({residual}); k and c are the channel's own "
+        f"fit's (k {k / 1e3:.1f} kN/m, c {c / 1e3:.3f} kN s/m), not determined by the data: each interval is "
+        f"the whole range searched")
+    return entry
+
+
 def reported(value: float, ci, check: dict, q: str) -> tuple[float, list]:
     """The tire's value and interval of quantity `q` ('k' or 'c'): the joint fit's, or, where the joint fit's k
     or c lies outside the free decay's interval, the free decay's with its interval stretched to hold the
-    joint fit's estimate too."""
+    joint fit's estimate too; where the joint fit collapsed (:func:`collapsed`), the channel's own fit's with
+    the range searched."""
+    if check.get("collapsed"):
+        return float(check[q]), [float(v) for v in check[f"{q}_ci"]]
     if not check.get("valid") or not check.get("prefer"):
         return float(value), [float(v) for v in ci]
     lo, hi = check[f"{q}_ci"]

@@ -1,0 +1,63 @@
+"""What the diagnosis reports per tire beside the joint fit: a collapsed joint fit (k or c outside the range it
+searches) is replaced by the channel's own fit with the whole range as its interval, and said so.
+
+The rig's truth is the reference; the diagnosis never reads it."""
+
+import dataclasses
+
+import pytest
+
+from identification.diagnose.free_decay import collapsed, free_decay_check
+from identification.diagnose.joint_fit import fit_tractor
+from identification.diagnose.joint_select import TractorDiagnosis
+from identification.diagnose.joint_start import starting_values
+from identification.diagnose.run import diagnosis_warnings
+from identification.diagnose.tractor import TractorFitModel, TractorProblem
+from identification.rig import run_rig
+
+
+@pytest.fixture(scope="module")
+def corners():
+    run = run_rig((), {"duration_s": 4.0, "speed_kmh": 10.0}, seed=8)
+    pb = TractorProblem.from_recording(run.recording)
+    start = starting_values(pb)
+    model = TractorFitModel((), pb)
+    fit = fit_tractor(model, {n: start[n] for n in model.names}, budget=200)
+    return run, pb, start, fit
+
+
+def _diagnosis(pb, start, fit, final):
+    return TractorDiagnosis(problem=pb, effects=[], baseline=fit, final=final, rounds=[], evidence={},
+                            unexplained={t: None for t in pb.channels}, seconds=0.0, extra={"start": start})
+
+
+def test_a_sound_fit_is_not_collapsed_and_keeps_its_own_values(corners):
+    run, pb, start, fit = corners
+    diag = _diagnosis(pb, start, fit, fit)
+    assert not any(collapsed(diag, t) for t in pb.channels)
+    diag.extra["free_decay"] = free_decay_check(diag)
+    for t, doc in diag.to_json()["tires"].items():
+        assert doc["k_source"] in ("joint_fit", "free_decay")
+        assert abs(doc["k"] / run.truth["tires"][t]["k"] - 1) < 0.03
+
+
+@pytest.mark.parametrize("name, value", [("k_RL", 1e-6), ("k_RL", 1e9), ("c_RL", 1e-3)])
+def test_a_collapsed_tire_reports_its_channel_fit_with_the_range_searched(corners, name, value):
+    run, pb, start, fit = corners
+    broken = dataclasses.replace(fit, params={**fit.params, name: value})
+    diag = _diagnosis(pb, start, fit, broken)
+    assert [t for t in pb.channels if collapsed(diag, t)] == ["RL"]
+    diag.extra["free_decay"] = free_decay_check(diag)
+    doc = diag.to_json()["tires"]
+    rl, truth = doc["RL"], run.truth["tires"]["RL"]
+    assert rl["k_source"] == "channel_fit"
+    assert abs(rl["k"] / truth["k"] - 1) < 0.05 and abs(rl["c"] / truth["c"] - 1) < 0.25   # a clean corner
+    assert rl["k_ci"] == pytest.approx([0.2 * rl["k"], 5.0 * rl["k"]])                    # the range searched
+    assert rl["k_ci"][0] <= truth["k"] <= rl["k_ci"][1] and rl["c_ci"][0] <= truth["c"] <= rl["c_ci"][1]
+    assert all(doc[t]["k_source"] != "channel_fit" for t in ("FL", "FR", "RR"))
+    warning = [w for w in diagnosis_warnings(diag, _NoGain()) if w.startswith("RL: the joint fit collapsed")]
+    assert len(warning) == 1 and "not determined by the data" in warning[0]
+
+
+class _NoGain:
+    note = final_note = None
