@@ -61,3 +61,19 @@ def test_a_collapsed_tire_reports_its_channel_fit_with_the_range_searched(corner
 
 class _NoGain:
     note = final_note = None
+
+
+def test_a_disagreement_with_the_channel_fit_is_said_even_where_it_is_no_check(corners):
+    """A body named: the channel's waveform fit is no check of the joint fit (the hub rings in the body's mode),
+    but a joint k 40 % off it, beyond both intervals, is said, with why; the joint values stand."""
+    run, pb, start, fit = corners
+    k = fit.params["k_RL"] * 1.4
+    moved = dataclasses.replace(fit, params={**fit.params, "k_RL": k}, ci={**fit.ci, "k_RL": (0.99 * k, 1.01 * k)})
+    diag = dataclasses.replace(_diagnosis(pb, start, fit, moved), effects=["axle_coupling"])
+    check = free_decay_check(diag)
+    assert not check["RL"]["valid"] and check["RL"]["k_apart"] > 1
+    assert check["RL"]["reason"].startswith("RL: the joint fit's k +")
+    assert "which is no check here (axle_coupling named" in check["RL"]["reason"]
+    assert all(check[t]["reason"] is None for t in ("FL", "FR", "RR"))
+    diag.extra["free_decay"] = check
+    assert diag.to_json()["tires"]["RL"]["k"] == k                      # the joint fit's value stands

@@ -56,35 +56,28 @@ def free_decay_check(diag) -> dict:
         if collapsed(diag, tire):
             out[tire] = _channel_fit_instead(diag, tire)
             continue
-        if named:
-            out[tire] = {"valid": False, "why_not": f"{', '.join(named)} named: the free decay is not a "
-                                                    f"linear tire's under a corner mass"}
-            continue
         try:
             sig = preprocess(rec, [tire], cutoff_hz=pb.cutoff_hz, min_peaks=1)[tire]
             wave = identify_waveform(sig, rec.wheel_load_N[tire] / STANDARD_GRAVITY, source=rec.source)
         except InputError as exc:
             out[tire] = {"valid": False, "why_not": f"no waveform fit: {exc.problem}"}
             continue
-        if not wave.r2 >= MIN_DECAY_R2:   # a forced response, a progressive or a coupled hub: no damped sinusoid
-            out[tire] = {"valid": False, "why_not": f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < "
-                                                    f"{MIN_DECAY_R2})"}
-            continue
         fin = diag.final
         entry = {"valid": True, "why_not": None, "k": float(wave.k), "c": float(wave.c),
                  "k_ci": [float(v) for v in wave.k_ci], "c_ci": [float(v) for v in wave.c_ci]}
-        sentences = []
-        for q in ("k", "c"):
-            est, (lo, hi) = fin.params[f"{q}_{tire}"], fin.ci[f"{q}_{tire}"]
-            h_joint = max(est - lo, hi - est) if math.isfinite(hi) else math.inf
-            h_decay = (entry[f"{q}_ci"][1] - entry[f"{q}_ci"][0]) / 2
-            joint = math.hypot(h_joint, h_decay)
-            apart = abs(est - entry[q]) / joint if joint > 0 else math.inf
-            entry[f"{q}_apart"] = float(apart)
-            entry[f"{q}_outside_decay"] = bool(not (entry[f"{q}_ci"][0] <= est <= entry[f"{q}_ci"][1]))
-            if apart > 1:
-                sentences.append(f"{q} {100 * (est / entry[q] - 1):+.1f} % from the free decay's "
-                                 f"({apart:.1f} joint half-widths)")
+        why_not = (f"{', '.join(named)} named: the free decay is not a linear tire's under a corner mass" if named
+                   else None if wave.r2 >= MIN_DECAY_R2 else   # a forced response, a progressive or coupled hub
+                   f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < {MIN_DECAY_R2})")
+        sentences = _compare(fin, tire, entry, "the free decay's" if why_not is None else
+                             "the channel's waveform fit's")
+        if why_not is not None:
+            # no check, but a disagreement beyond the joint interval is said, with why the fit is no check
+            entry.update(valid=False, why_not=why_not, agree=not sentences, prefer=False, reason=None)
+            if sentences:
+                entry["reason"] = (f"{tire}: the joint fit's {' and '.join(sentences)}, which is no check here "
+                                   f"({why_not}); the joint fit's values stand")
+            out[tire] = entry
+            continue
         entry["agree"] = not sentences
         entry["prefer"] = entry["k_outside_decay"] or entry["c_outside_decay"]
         entry["reason"] = None
@@ -102,6 +95,24 @@ def free_decay_check(diag) -> dict:
                  f"%, c {100 * (fin.params[f'c_{tire}'] / entry['c'] - 1):+.1f} %), which is stretched to hold them")
         out[tire] = entry
     return out
+
+
+def _compare(fin, tire: str, entry: dict, other: str) -> list:
+    """The joint fit's k and c against `entry`'s (another fit's, with intervals): fills ``<q>_apart`` (|Δ| in
+    joint half-widths √(h_joint² + h_other²)) and ``<q>_outside_decay``; a sentence per quantity further apart
+    than the joint interval."""
+    sentences = []
+    for q in ("k", "c"):
+        est, (lo, hi) = fin.params[f"{q}_{tire}"], fin.ci[f"{q}_{tire}"]
+        h_joint = max(est - lo, hi - est) if math.isfinite(hi) else math.inf
+        h_decay = (entry[f"{q}_ci"][1] - entry[f"{q}_ci"][0]) / 2
+        joint = math.hypot(h_joint, h_decay)
+        apart = abs(est - entry[q]) / joint if joint > 0 else math.inf
+        entry[f"{q}_apart"] = float(apart)
+        entry[f"{q}_outside_decay"] = bool(not (entry[f"{q}_ci"][0] <= est <= entry[f"{q}_ci"][1]))
+        if apart > 1:
+            sentences.append(f"{q} {100 * (est / entry[q] - 1):+.1f} % from {other} ({apart:.1f} joint half-widths)")
+    return sentences
 
 
 def collapsed(diag, tire: str) -> bool:
