@@ -8,7 +8,8 @@ independent simulator's (``tests/independent``, one per setting: ``--seeds``, ge
 per checkout (imports and the compilation excluded, after one warm-up run); the CPU counted is the
 process's and its children's.  With ``--before CHECKOUT`` (another commit's worktree) the same recordings
 are diagnosed by that code in the same run: both CPU times, their ratio and the largest relative change
-of any tire's k or c between the two are printed side by side.
+of any tire's k or c between the two are printed side by side (tires whose joint fit collapsed, reported
+as their channel's own fit by one of the two, are named instead).
 
 Then: the wall time of one ``cleatfmu diagnose`` with an empty numba cache (a fresh install) against a
 warm one, one model run stepped by the compiled kernel and by the plain-Python reference, and one
@@ -70,7 +71,8 @@ def child(code: str, recordings: list[str]) -> None:
         cpu, wall, out = _command(main, ["diagnose", rec, "--json", "--workers", "1"])
         tires = (out or {}).get("tires") or {}
         print(json.dumps({"recording": rec, "cpu": cpu, "wall": wall,
-                          "kc": {t: [v.get("k"), v.get("c")] for t, v in tires.items() if isinstance(v, dict)}}),
+                          "kc": {t: [v.get("k"), v.get("c")] for t, v in tires.items() if isinstance(v, dict)},
+                          "channel_fit": [t for t, v in tires.items() if v.get("k_source") == "channel_fit"]}),
               flush=True)
 
 
@@ -104,8 +106,8 @@ def run_child(code: Path, recordings: list[str]) -> dict:
     return {r["recording"]: r for r in map(json.loads, proc.stdout.splitlines())}
 
 
-def _largest_change(a: dict, b: dict) -> float | None:
-    changes = [abs(x / y - 1) for t in a if t in b for x, y in zip(a[t], b[t]) if x and y]
+def _largest_change(a: dict, b: dict, skip=()) -> float | None:
+    changes = [abs(x / y - 1) for t in a if t in b and t not in skip for x, y in zip(a[t], b[t]) if x and y]
     return max(changes) if changes else None
 
 
@@ -120,8 +122,11 @@ def _table(recordings, now: dict, before: dict | None) -> None:
         if before:
             b = before[rec]
             olds.append(b["cpu"])
-            change = _largest_change(r["kc"], b["kc"])
+            skip = set(r.get("channel_fit", [])) | set(b.get("channel_fit", []))
+            change = _largest_change(r["kc"], b["kc"], skip)
             line += f" {b['cpu']:7.2f} {b['cpu'] / r['cpu']:5.2f}x {'-' if change is None else f'{change:.1e}':>14}"
+            if skip:
+                line += f"  ({'/'.join(sorted(skip))}: the joint fit collapsed, the channel's fit reported)"
         print(line)
     line = f"  {'median':<44} {statistics.median(cpus):7.2f}"
     if before:
