@@ -32,7 +32,7 @@ from scipy import optimize, stats
 
 from ..waveform import long_run_variance_ratio
 from .fit import _exp
-from .joint_jacobian import FAILED, GroupedJacobian, channel_dependence, column_groups
+from .joint_jacobian import FAILED, GroupedJacobian, channel_dependence
 from .tractor import SIGNED, TractorFitModel
 
 __all__ = ["TractorFit", "fit_tractor", "sse_of", "unexplained", "sandwich_covariance", "correlation_lag",
@@ -246,15 +246,12 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
     diff = np.array([1e-4 if lg else _DIFF_STEP.get(n.rsplit("_", 1)[0] if n not in _DIFF_STEP else n, 1e-4)
                      for n, lg in zip(free, logs)])
     dependence = channel_dependence(model, free) if free else None
-    if free and dependence is not None and len(column_groups(dependence)) < len(free):
+    grouped = GroupedJacobian(residual, diff, dependence, int(w.sum())) if dependence is not None else None
+    if free:
         # independent tires: their columns differenced together, the same Jacobian from fewer runs
-        grouped = GroupedJacobian(residual, diff, dependence, int(w.sum()))
-        sol = optimize.least_squares(grouped.value, x0, jac=grouped, method="lm",
-                                     max_nfev=max(3, budget // (len(free) + 1)))
-        x, jac, fun = sol.x, sol.jac, sol.fun
-    elif free:
-        sol = optimize.least_squares(residual, x0, method="lm", diff_step=diff,
-                                     max_nfev=max(3, budget // (len(free) + 1)))
+        how = dict(fun=grouped.value, jac=grouped) if grouped and len(grouped.groups) < len(free) else \
+            dict(fun=residual, diff_step=diff)
+        sol = optimize.least_squares(x0=x0, method="lm", max_nfev=max(3, budget // (len(free) + 1)), **how)
         x, jac, fun = sol.x, sol.jac, sol.fun
     else:
         x, jac, fun = x0, np.zeros((meas.size, 0)), residual(x0)
