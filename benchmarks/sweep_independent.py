@@ -101,6 +101,9 @@ def analyse(job) -> dict:
         if d is None:
             continue
         tt = truth["tires"][w]
+        for key in ("k_ci", "c_ci"):   # an unbounded end is null in strict JSON
+            if d.get(key):
+                d[key] = [-np.inf if d[key][0] is None else d[key][0], np.inf if d[key][1] is None else d[key][1]]
         e = {"k_err": d["k"] / tt["k"] - 1, "c_err": d["c"] / tt["c"] - 1,
              "k_in": bool(d.get("k_ci") and d["k_ci"][0] <= tt["k"] <= d["k_ci"][1]),
              "c_in": bool(d.get("c_ci") and d["c_ci"][0] <= tt["c"] <= d["c_ci"][1]),

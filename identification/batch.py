@@ -20,13 +20,12 @@ its one-line error; the others go on.  Every stage's wall time is kept.
 
 from __future__ import annotations
 
-import json
 import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ._files import atomic_write_texts
+from ._files import atomic_write_texts, json_text
 from .errors import InputError
 
 __all__ = ["TireReport", "DiagnosisReport", "RecordingReport", "BatchResult", "collect_recordings", "run_batch", "STAGES"]
@@ -175,7 +174,7 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
         with _timed(rep.timings, "export"):
             params = {"recording": rec.source, "speed_kmh": rec.speed_kmh, "tires": {tire: rep.waveform or rep.paper}}
             params_file = Path(out_dir) / "params" / f"{stem}_{tire}.json"
-            atomic_write_texts({params_file: json.dumps(params, indent=2) + "\n"})
+            atomic_write_texts({params_file: json_text(params) + "\n"})
             try:
                 export_fmu(params_file, fmu_path, tire=tire, backend="native")
                 rep.fmus.append({"file": f"fmu/{fmu_path.name}", "kind": "point_contact",

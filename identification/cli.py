@@ -14,13 +14,13 @@ from __future__ import annotations
 import argparse
 import importlib
 import io
-import json
 import os
 import sys
 
 from . import __version__
 from .cliutil import OutputFolders, Parser, add_example_option, read_recording_arg
 from .errors import InputError
+from ._files import json_text
 
 __all__ = ["main", "build_parser", "EXIT_CLOSED_PIPE"]
 
@@ -93,7 +93,7 @@ def cmd_identify(args) -> int:
             print(f"cleatfmu: warning: {rec.source}: {r.sentence()}", file=sys.stderr)
         doc = {"recording": rec.source, "speed_kmh": rec.speed_kmh,
                "tires": {name: r.to_json() for name, r in results.items()}}
-        print(json.dumps(doc, indent=2))
+        print(json_text(doc))
     else:
         print(format_table(rec, identified))
         for r in refused:

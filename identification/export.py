@@ -130,10 +130,11 @@ def read_identified(path, tire: str | None = None, *, accept_out_of_range: bool 
     for key in _NUMBERS:
         if key in entry and not _finite_number(entry[key]):
             raise InputError(path, f"tire {tire}: {key} must be a finite number, got {_show(entry[key])}")
-    for key in ("k_ci", "c_ci"):  # the waveform method's 95 % intervals
+    for key in ("k_ci", "c_ci"):  # the 95 % intervals; an unbounded end is null
         ci = entry.get(key)
         if ci is not None and not (isinstance(ci, list) and len(ci) == 2
-                                   and all(_finite_number(v) for v in ci) and ci[0] <= ci[1]):
+                                   and all(v is None or _finite_number(v) for v in ci)
+                                   and (None in ci or ci[0] <= ci[1])):
             shown = "[" + ", ".join(map(_show, ci)) + "]" if isinstance(ci, list) else _show(ci)
             raise InputError(path, f"tire {tire}: {key} must be [low, high], got {shown}")
     for key, name, unit, strictly in (("k", "stiffness k", "N/m", True), ("c", "damping c", "N*s/m", False)):

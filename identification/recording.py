@@ -51,7 +51,7 @@ from typing import Any
 
 import numpy as np
 
-from ._files import atomic_write_texts
+from ._files import atomic_write_texts, json_text
 from .acquisition import Acquisition, acquisition_from_sidecar
 from .errors import InputError
 from .plausibility import OVERRIDE_KEY, check_value, out_of_range
@@ -383,7 +383,7 @@ def format_recording(rec: Recording, stem: str | Path, *, time_decimals: int = 6
     fmt = ",".join([f"%.{time_decimals}f"] + [f"%.{value_decimals}f"] * len(rec.tires))
     body = "\n".join(fmt % row for row in zip(*cols))
     return {csv_path: "time," + ",".join(rec.tires) + "\n" + body + "\n",
-            meta_path: json.dumps(rec.sidecar(), indent=2) + "\n"}
+            meta_path: json_text(rec.sidecar()) + "\n"}
 
 
 def write_recording(rec: Recording, stem: str | Path, *, time_decimals: int = 6,

@@ -17,13 +17,12 @@ from __future__ import annotations
 import base64
 import datetime as _dt
 import html
-import json
 import os
 import shutil
 from pathlib import Path
 
 from . import __version__
-from ._files import atomic_write_texts
+from ._files import atomic_write_texts, json_text
 from .batch import FIGURES_STAGING, BatchResult
 from .report_tables import (METHODS_HEADS, TABLE4_HEADS, csv_text, read_truth, ride_table, table4_table,
                             verdict_heads, verdict_table, waveform_table)
@@ -343,7 +342,7 @@ def write_report(result: BatchResult, *, title: str = "cleatfmu report", extra: 
     page = render_report(result, title=title, extra=extra, tables=tables, speed_png=_speed_png(result, truths))
     (out / "tables").mkdir(exist_ok=True)
     atomic_write_texts({out / "report.html": page,
-                        out / "summary.json": json.dumps(summary, indent=1, default=float) + "\n",
+                        out / "summary.json": json_text(summary, indent=1, default=float) + "\n",
                         **{out / "tables" / f"{name}.csv": csv_text(t) for name, t in tables.items()}})
     shutil.rmtree(staging, ignore_errors=True)
     return out / "report.html"

@@ -8,11 +8,11 @@ diagnosed body against every channel
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from .cliutil import add_example_option, check_output, choose_tire, read_recording_arg
 from .errors import InputError
+from ._files import json_text
 
 __all__ = ["add_parser"]
 
@@ -144,7 +144,7 @@ def _run_tractor(args) -> int:
     sim = simulate_tractor(paths, rec, args.body, cutoff_hz=args.cutoff_hz, step_s=args.max_step_s)
     if args.plot is not None:
         _save_plot(_plot_tractor(sim), args.plot)
-    print(json.dumps(_with_window(sim.to_json(), rec), indent=2) if args.json else _tractor_text(sim, args.verbose))
+    print(json_text(_with_window(sim.to_json(), rec)) if args.json else _tractor_text(sim, args.verbose))
     return 0
 
 
@@ -179,7 +179,7 @@ def run(args) -> int:
     if args.plot is not None:
         from .plots import plot_comparison
         _save_plot(plot_comparison(cmp), args.plot)
-    print(json.dumps(_with_window(cmp.to_json(), rec), indent=2) if args.json else _text(cmp, rec))
+    print(json_text(_with_window(cmp.to_json(), rec)) if args.json else _text(cmp, rec))
     return 0
 
 

@@ -9,11 +9,11 @@ fmpy and libcosim against the project's master.
 
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 
 from .cliutil import add_example_option, check_output, read_recording_arg, write_files
 from .errors import InputError
+from ._files import json_text
 
 __all__ = ["point_contact_as_builtin", "run", "add_parser"]
 
@@ -78,7 +78,7 @@ def run(args) -> int:
     doc = {"ssp": str(args.output), "start_s": start, "stop_s": stop, "step_s": h, "body": body.kind,
            "seat_x_m": seat_x, "seat_y": args.seat_y, "point_contact_as_builtin": converted, "check": check}
     if args.json:
-        print(json.dumps(doc, indent=2))
+        print(json_text(doc))
         return _status(check)
     print(f"wrote {args.output}: body ({body.kind}) + four extended tire FMUs, SSP 1.0; "
           f"default experiment {start:.4g}-{stop:.4g} s, step {h * 1e3:.4g} ms")

@@ -5,11 +5,11 @@ See :mod:`identification.static` for the input format and the method.
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 
 from .errors import InputError
+from ._files import json_text
 
 __all__ = ["add_parser", "run"]
 
@@ -47,7 +47,7 @@ def run(args) -> int:
     result = static_stiffness_file(args.compression, segments=args.segments)
     if args.plot is not None:
         _write_plot(result, args.plot)
-    print(json.dumps(result.to_json(), indent=2) if args.json else result.text())
+    print(json_text(result.to_json()) if args.json else result.text())
     return 0
 
 

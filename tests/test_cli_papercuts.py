@@ -335,3 +335,38 @@ def test_tractor_text_says_not_determined_instead_of_printing_huge_bounds():
     assert _interval(480e3, (0.0, float("inf")), 1e3, ".1f") == "(not determined by the data)"
     assert _interval(2e3, (0.5e3, 4.2e3), 1e3, ".3f") == "(not determined by the data)"   # half-width 1.85 > 1
     assert _interval(2e3, (1.2e3, 2.9e3), 1e3, ".3f") == "(1.200-2.900)"                  # half-width 0.85
+
+
+def test_json_output_is_strict_json_with_null_for_unbounded_values():
+    """An unbounded interval end is null, never ``Infinity``: strict parsers (jq, JavaScript) refuse those."""
+    import math
+
+    import numpy as np
+
+    from identification._files import json_text
+
+    doc = {"k_ci": (5e5, math.inf), "c_ci": [np.float64(-np.inf), np.float32(2.0)], "nan": float("nan"),
+           "arr": np.array([1.0, np.inf]), "n": np.int64(3), "ok": True, "none": None}
+
+    def refuse(constant):
+        raise ValueError(f"non-standard JSON constant {constant}")
+
+    back = json.loads(json_text(doc), parse_constant=refuse)
+    assert back == {"k_ci": [5e5, None], "c_ci": [None, 2.0], "nan": None, "arr": [1.0, None], "n": 3,
+                    "ok": True, "none": None}
+
+
+def test_every_json_document_is_written_through_the_strict_writer():
+    """No module writes a JSON document with ``json.dumps`` itself (that would write ``Infinity``); only
+    one-value quotes in error messages (no ``indent``) may."""
+    import ast
+
+    offenders = []
+    for path in Path(__file__).resolve().parents[1].joinpath("identification").rglob("*.py"):
+        if path.name == "_files.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in ("dumps", "dump") \
+                    and getattr(node.func.value, "id", "") == "json" and any(k.arg == "indent" for k in node.keywords):
+                offenders.append(f"{path.name}:{node.lineno}")
+    assert offenders == []

@@ -11,11 +11,11 @@ whole-body values of EU directive 2002/44/EC.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 from ..errors import InputError
+from .._files import json_text
 
 __all__ = ["add_parser", "run", "read_acceleration_csv", "DEFAULT_EXPOSURE_H"]
 
@@ -217,7 +217,7 @@ def run(args) -> int:
             doc = {"file": str(args.acc), "column": names[0], **docs[names[0]]}
         else:
             doc = {"file": str(args.acc), "weighting": weighting.name, "sample_rate_hz": fs, "channels": docs}
-        print(json.dumps(doc, indent=2))
+        print(json_text(doc))
     else:
         print(format_table(args.acc, weighting, results))
     return 0

@@ -8,11 +8,11 @@ ISO 2631-1's Wk (vertical) at the seat.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 
 from ..errors import InputError
+from .._files import json_text
 
 __all__ = ["add_parser", "run", "DEFAULT_COMPARE"]
 
@@ -98,7 +98,7 @@ def run(args) -> int:
         from ..plots import plot_ride, save_png
         save_png(plot_ride(runs, road_class=args.road, speed_m_s=speed), args.plot)
     if args.json:
-        print(json.dumps(doc, indent=2))
+        print(json_text(doc))
     else:
         print(f"{rec.source}: ISO 8608 class {args.road} road (seed {args.seed}), {speed * 3.6:.3g} km/h, "
               f"{args.duration_s:g} s; {how}; seat {seat_x:.2f} m behind the front axle")

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import time
@@ -11,6 +10,7 @@ from ..cliutil import (add_example_option, announce_compilation, check_folder, c
                        read_recording_arg, write_files)
 from ..errors import InputError
 from .run import diagnosis_warnings, run_tractor_diagnosis
+from .._files import json_text
 
 __all__ = ["add_parser", "run"]
 
@@ -157,7 +157,7 @@ def run(args) -> int:
             doc["nrmse_after_note"] = gain.final_note
         if window_json(diag.problem.rec) is not None:    # the conditioning with the signs the fit chose
             doc["analysis_window"] = window_json(diag.problem.rec)
-        print(json.dumps(doc, indent=2))
+        print(json_text(doc))
     else:
         print(_tractor_text(diag, gain, args.verbose))
     return 0

@@ -8,14 +8,13 @@ The pipeline never reads it.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from .._files import atomic_write_texts
+from .._files import atomic_write_texts, json_text
 from ..recording import Acquisition, Recording, format_recording
 from . import params as P
 from .artifacts import active, artifact_rng, engine_vibration, sensor_artifacts
@@ -206,6 +205,6 @@ def write_run(run: RigRun, stem, *, value_decimals: int = 4) -> tuple[Path, Path
     truth = dict(run.truth, recording=stem.name + ".csv")
     fs = run.recording.sample_rate_hz
     files = format_recording(run.recording, stem, time_decimals=_time_decimals(fs), value_decimals=value_decimals)
-    files[truth_path] = json.dumps(truth, indent=1) + "\n"
+    files[truth_path] = json_text(truth, indent=1) + "\n"
     atomic_write_texts(files)
     return next(iter(files)), truth_path
