@@ -1,9 +1,10 @@
 """Diagnosis speed: one tire of a 5 s, 1 kHz recording (goal <= 5 s, aim 1 s).
 
-For several hidden effects, prints the wall time of the diagnosis (forward
-selection, 2 worker processes), the time per candidate model fitted, and the
-time of the FMU gain check (building the FMUs and co-simulating them with
-fmpy).  Run: ``python benchmarks/bench_diagnose.py``.
+One tire's diagnosis is the joint diagnosis on that tire's channel and the same side's other axle
+(:func:`identification.diagnose.run.run_diagnosis`).  For several hidden effects, prints the wall time
+of the diagnosis (forward selection, 2 worker processes), the time per candidate model fitted, and the
+time of the FMU gain check (building the FMUs and co-simulating them with fmpy).
+Run: ``python benchmarks/bench_diagnose.py``.
 """
 
 import statistics

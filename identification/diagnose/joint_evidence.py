@@ -32,7 +32,6 @@ import numpy as np
 
 from ..condition import ENGINE_BAND_HZ
 from ..recording import FRONT_TIRES, STANDARD_GRAVITY
-from .evidence import spectral_line
 from .joint_fit import TractorFit
 
 __all__ = ["check_tractor", "contact_losses"]
@@ -248,3 +247,21 @@ _CHECKS = {"enveloping": _enveloping, "lift_off": _lift_off, "axle_coupling": _a
 def check_tractor(effect: str, fit: TractorFit, base: TractorFit) -> tuple[bool, str]:
     """Whether `fit` (a model with `effect`, extending `base`) shows the effect physically, and the sentence."""
     return _CHECKS[effect](fit, base)
+
+
+def spectral_line(signal, sample_rate_hz: float, frequency_hz: float) -> tuple[float, float]:
+    """Amplitude (signal units) of the line at `frequency_hz` and its ratio to the surrounding floor."""
+    x = np.asarray(signal, dtype=float)
+    if x.size < 32:
+        return 0.0, 0.0
+    x = (x - x.mean()) * np.hanning(x.size)
+    n = max(1 << 16, 1 << int(np.ceil(np.log2(4 * x.size))))
+    spec = np.abs(np.fft.rfft(x, n)) * 2 / np.sum(np.hanning(x.size))
+    f = np.fft.rfftfreq(n, 1 / sample_rate_hz)
+    resolution = 2 * sample_rate_hz / x.size
+    near = np.abs(f - frequency_hz) <= resolution
+    ring = (np.abs(f - frequency_hz) > 2 * resolution) & (np.abs(f - frequency_hz) < 8 * resolution + 2.0)
+    if not near.any() or not ring.any():
+        return 0.0, 0.0
+    line = float(spec[near].max())
+    return line, line / max(float(np.median(spec[ring])), 1e-12)

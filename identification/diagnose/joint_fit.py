@@ -31,9 +31,14 @@ import numpy as np
 from scipy import optimize, stats
 
 from ..waveform import long_run_variance_ratio
-from .fit import _exp
 from .joint_jacobian import FAILED, GroupedJacobian, channel_dependence
 from .tractor import SIGNED, TractorFitModel
+
+
+def _exp(x: float) -> float:
+    """exp without overflow (a log-parameter far out of range maps to a huge, finite value)."""
+    return math.exp(min(float(x), 700.0))
+
 
 __all__ = ["TractorFit", "fit_tractor", "sse_of", "unexplained", "sandwich_covariance", "correlation_lag",
            "residual_correlation_lag",

@@ -27,11 +27,10 @@ from ..recording import FRONT_TIRES
 from ..workers import one_blas_thread
 from .joint_evidence import check_tractor
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
-from .joint_start import (ENVELOPE_GUESS_M, body_start, enveloped_timings, refine_timing, rescue_start,
-                          starting_values)
+from .joint_start import (ENVELOPE_GUESS_M, body_start, enveloped_timings, periodic_start, refine_timing,
+                          rescue_start, starting_values)
 from .joint_signs import settle_signs
 from .joint_timing import BODY_DEFAULTS
-from .select import periodic_start
 from .tractor import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, parameter_unit
 
 __all__ = ["TractorDiagnosis", "diagnose_tractor", "TractorCandidate"]

@@ -22,7 +22,8 @@ from ..waveform import identify_waveform
 from .joint_timing import joint_timing, scaled_timing
 from .tractor import TractorProblem
 
-__all__ = ["tire_start", "starting_values", "rescue_start", "enveloped_timings", "body_start", "refine_timing", "ENVELOPE_GUESS_M"]
+__all__ = ["tire_start", "starting_values", "rescue_start", "enveloped_timings", "body_start", "refine_timing", "ENVELOPE_GUESS_M",
+           "periodic_start"]
 
 def tire_start(pb: TractorProblem, tire: str) -> tuple[float, float]:
     """k (N/m) and c (N s/m) of one channel from the waveform fit, the paper's method, or its frequency."""
@@ -160,3 +161,27 @@ def refine_timing(model, theta: dict, *, step_s: float | None = None, half_width
                 if sse < best_sse:
                     best, best_sse = trial, sse
     return best
+
+
+def periodic_start(rec, tire: str, *, first_impact_s: float, cutoff_hz: float, k: float, c: float,
+                   arrival: float) -> dict | None:
+    """Frequency, road amplitude and phase of a steady periodic component before the impact in one channel."""
+    t = rec.time_s
+    pre = t < first_impact_s - 0.05
+    if pre.sum() < 0.2 * rec.sample_rate_hz:
+        return None
+    x = rec.accel_m_s2[tire][pre] - np.mean(rec.accel_m_s2[tire][pre])
+    n = max(1 << 16, 1 << int(np.ceil(np.log2(4 * x.size))))
+    spec = np.abs(np.fft.rfft(x * np.hanning(x.size), n))
+    f = np.fft.rfftfreq(n, 1 / rec.sample_rate_hz)
+    band = (f >= 1.0) & (f <= 0.45 * cutoff_hz)
+    freq = float(f[band][np.argmax(spec[band])])
+    w = 2 * np.pi * freq
+    basis = np.column_stack([np.sin(w * t[pre]), np.cos(w * t[pre])])
+    b1, b2 = np.linalg.lstsq(basis, x, rcond=None)[0]
+    accel = b1 + 1j * b2                       # a(t) = Im(accel e^{jωt})
+    m = rec.mass_kg(tire)
+    H = (k + 1j * w * c) / (k - m * w * w + 1j * w * c)
+    road = -accel / (w * w * H)
+    return {"lug_amplitude": float(abs(road)), "lug_frequency": freq,
+            "lug_phase": float(np.angle(road) + w * arrival)}

@@ -9,24 +9,22 @@ from ..preprocess import DEFAULT_CUTOFF_HZ
 __all__ = ["run_diagnosis", "run_tractor_diagnosis", "diagnosis_warnings"]
 
 
-def run_diagnosis(rec, tire: str, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_path=None, workers: int = 1,
+def run_diagnosis(rec, tire: str, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=None, workers: int = 1,
                   progress=None):
-    """Diagnose one tire and measure the gain with the FMUs: (Diagnosis, GainCheck)."""
-    from .fmu import measure_gain
-    from .select import diagnose
-
-    diag = diagnose(rec, tire, cutoff_hz=cutoff_hz, workers=workers, progress=progress)
-    if progress is not None:
-        progress("FMU co-simulation")
-    try:
-        gain = measure_gain(diag, fmu_path)
-    except OSError as exc:
-        raise InputError(fmu_path, f"cannot write: {exc.strerror or exc}") from None
-    return diag, gain
+    """Diagnose one tire: the joint diagnosis restricted to its channel and, when recorded, the same side's
+    other axle (the pair that can tell a pitching half-tractor from two corners); (TractorDiagnosis,
+    TractorGain), the tire's results under ``f"k_{tire}"``, ``f"c_{tire}"``.  The commands use the whole
+    tractor (:func:`run_tractor_diagnosis`)."""
+    if tire not in rec.tires:
+        raise InputError(rec.source, f"tire {tire} is not in the recording (it has {', '.join(rec.tires)})")
+    pair = ("R" if tire[0] == "F" else "F") + tire[1]
+    channels = [t for t in rec.tires if t in (tire, pair)]
+    return run_tractor_diagnosis(rec, cutoff_hz=cutoff_hz, fmu_dir=fmu_dir, workers=workers, progress=progress,
+                                 channels=channels)
 
 
 def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=None, stem: str | None = None,
-                          workers: int = 1, progress=None, strict: bool = True):
+                          workers: int = 1, progress=None, strict: bool = True, channels=None):
     """Diagnose every channel jointly and measure the gain with one FMU per tire: (TractorDiagnosis, TractorGain).
 
     With `fmu_dir` the extended FMUs are kept there as ``<stem>_<TIRE>.fmu`` (`stem`: the recording's); FMUs
@@ -35,7 +33,7 @@ def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=
     from ..tractor_cosim import measure_tractor_gain
     from .joint_select import diagnose_tractor
 
-    diag = diagnose_tractor(rec, cutoff_hz=cutoff_hz, workers=workers, progress=progress)
+    diag = diagnose_tractor(rec, cutoff_hz=cutoff_hz, workers=workers, progress=progress, channels=channels)
     if progress is not None:
         progress("FMU co-simulation")
     try:

@@ -34,7 +34,7 @@ from ..model.kernels import run_model
 from ..model.sensing import sensed_lowpassed, sensed_lowpassed_reference
 from ..preprocess import DEFAULT_CUTOFF_HZ, broadband_noise, noise_rms, preprocess
 from ..recording import FRONT_TIRES, TIRES, Recording
-from .models import tire_law_parameters
+from .. import tire_law
 
 __all__ = ["EFFECTS", "TIRE_EFFECTS", "BODY_EFFECTS", "TractorProblem", "TractorFitModel", "parameter_unit"]
 
@@ -63,6 +63,10 @@ QUIET_MARGIN_S = 0.05
 STEADY_LINE_SHARE = 0.5
 PRE_S = 0.3
 DEFAULT_STEP_S = 1e-3
+#: Velocity scale of the friction damper's tanh law, m/s.
+FRICTION_VELOCITY_M_S = 0.01
+#: Unloaded radius of every fitting model's tire, m (the vertical law does not depend on it).
+_UNLOADED_RADIUS_M = 0.75
 #: Largest phase 2π f_aa h of the grid step at the anti-alias cut-off for models with point-contact edges.
 EDGE_PHASE_RAD = 0.4
 
@@ -325,3 +329,27 @@ class TractorFitModel:
             else:   # lug_phase: wrapped, not bounded
                 lo[name], hi[name] = -math.inf, math.inf
         return lo, hi
+
+
+def tire_law_parameters(rec: Recording, tire: str, effects, *, k: float, c: float, footprint=None, exponent=None,
+                        friction=None, lug=None) -> dict:
+    """The extended tire-law parameters of one tire of a fitting model .
+
+    `lug` is (amplitude m, frequency Hz, phase rad); every tire-side effect in
+    `effects` takes its parameter from the keyword of the same meaning.
+    """
+    p = dict(tire_law.EXTENDED_DEFAULTS)
+    p.update(stiffness=k, damping=c, unloaded_radius=_UNLOADED_RADIUS_M, static_load=rec.wheel_load_N[tire],
+             unilateral="lift_off" in effects)
+    if "enveloping" in effects:
+        p.update(footprint_length=footprint, parabolic_pressure=True, cleat_x=0.0, cleat_height=rec.cleat_height_m,
+                 cleat_width=rec.cleat_width_m,
+                 cleat_bevel=0.0 if rec.cleat_profile is None else rec.cleat_profile.builtin_bevel_m)
+    if "nonlinear_stiffness" in effects:
+        p.update(stiffness_exponent=exponent)
+    if "friction_damping" in effects:
+        p.update(friction_force=friction, friction_velocity=FRICTION_VELOCITY_M_S)
+    if "periodic_disturbance" in effects:
+        amplitude, frequency, phase = lug
+        p.update(lug_amplitude=amplitude, lug_pitch=rec.speed_m_s / frequency, lug_phase=phase)
+    return p
