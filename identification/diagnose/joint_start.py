@@ -101,8 +101,10 @@ def body_start(model, start: dict, *, step_s: float) -> dict:
     The corners' k absorb the body's motion (a front tire under a pitching body
     rings at another frequency than under its corner mass), so a body model
     started from them sits far from its optimum; k of each axle is scaled
-    together (c keeps its damping ratio), and the front-axle roll index, when
-    new, is scanned over a decade, before the least-squares fit.
+    together (c keeps its damping ratio) by the multipliers of
+    :data:`_MULTIPLIERS`, one axle at a time (front, rear, front again), and
+    the front-axle roll index, when new, is scanned over a decade, before the
+    least-squares fit.
     """
     from .joint_fit import sse_of
 
@@ -119,15 +121,28 @@ def body_start(model, start: dict, *, step_s: float) -> dict:
 
     fronts = any(t in FRONT_TIRES for t in pb.channels)
     rears = any(t not in FRONT_TIRES for t in pb.channels)
-    for mf in (_MULTIPLIERS if fronts else (1.0,)):
-        for mr in (_MULTIPLIERS if rears else (1.0,)):
-            trial = scaled(mf, mr)
+    scores = {}
+
+    def score(mf, mr):
+        if (mf, mr) not in scores:
             try:
-                sse = sse_of(model, trial, step_s)
+                scores[mf, mr] = sse_of(model, scaled(mf, mr), step_s)
             except (ValueError, FloatingPointError, np.linalg.LinAlgError):
-                continue
-            if sse < best_sse:
-                best, best_sse = trial, sse
+                scores[mf, mr] = math.inf
+        return scores[mf, mr]
+
+    # one axle's multiplier at a time, the other held at its best so far (front, rear, front again): the
+    # axles' multipliers barely interact, and the fit that follows finishes the job; a third of the grid's runs
+    mf, mr = 1.0, 1.0
+    for axle in ("front", "rear", "front"):
+        if not (fronts if axle == "front" else rears):
+            continue
+        if axle == "front":
+            mf = min(_MULTIPLIERS, key=lambda m: (score(m, mr), abs(m - 1.0)))
+        else:
+            mr = min(_MULTIPLIERS, key=lambda m: (score(mf, m), abs(m - 1.0)))
+    if score(mf, mr) < best_sse:
+        best, best_sse = scaled(mf, mr), score(mf, mr)
     if "pivot_index" in model.names:
         for value in (0.02, 0.05, 0.1, 0.2, 0.5, 1.0):
             trial = dict(best, pivot_index=value)
