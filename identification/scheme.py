@@ -1,18 +1,13 @@
-"""The co-simulation master's discrete scheme: one source for FMU runs and for the fitting models.
+"""The corner and half-tractor bodies of the single-FMU masters, their grid, road inputs and trajectory.
 
-A body (a corner mass, or a half-tractor in heave and pitch) rides on tires
-whose forces come from callbacks - an FMU's ``getReal`` in a co-simulation,
-the tire law itself in a fitting model - so both compute the same numbers.
-
-Per step h, with generalized coordinates q, mass matrix M (diagonal), hub
-Jacobian J (hub heights z = z_eq + J q) and a = M⁻¹ (Jᵀ F + G):
-
-1. q_{n+1} = q_n + h q̇_n + h²/2 q̈_n;
-2. predicted q̇* = q̇_n + h q̈_n − J_imp/2 (J_imp: the impulsive part of the
-   previous step, see below);
-3. tire forces for hub (z, ż) = (z_eq + J q_{n+1}, J q̇*) and the road at
-   t_{n+1}: direct feedthrough, no one-step delay;
-4. q̇_{n+1} = q̇_n + h/2 (q̈_n + q̈_{n+1}).
+There is one stepping scheme, :func:`identification.model.stepping.run_body`
+(reference Python; :mod:`identification.model.kernels` is its compiled
+twin): :func:`run_corner` (a corner mass, one coordinate) and
+:func:`run_half_tractor` (heave and pitch) are that scheme with J = [1] and
+J = [[1, a], [1, −b]], from the static equilibrium each tire's force law
+gives.  Tire forces come from callbacks - an FMU's ``getReal`` in a
+co-simulation, the tire law itself in a fitting model - so both compute the
+same numbers.
 
 Point-contact cleat edges are grid points (see :func:`cleat_grid`): there the
 road is the mean of its two sides and its rate ±H/h, and the force is also
@@ -196,7 +191,8 @@ def _equilibrium_corner(force: Callable[[float], float], weight: float, z_guess:
 def run_corner(force: ForceFn, *, mass_kg: float, start_s: float, step_s: float, n: int, inputs: TireInputs,
                unloaded_radius_m: float, stiffness_guess_n_m: float, before_step=None,
                initial_offset=(0.0, 0.0)) -> Trajectory:
-    """A corner mass m under gravity on one tire, from static equilibrium.
+    """A corner mass m under gravity on one tire, from static equilibrium: the body of one coordinate
+    stepped by :func:`identification.model.stepping.run_body` (the one stepping scheme).
 
     Parameters
     ----------
@@ -214,41 +210,27 @@ def run_corner(force: ForceFn, *, mass_kg: float, start_s: float, step_s: float,
         Hub height (m) and velocity (m/s) added to the static equilibrium at
         the start (a periodic steady state, see :func:`lug_steady_state`).
     """
-    g = STANDARD_GRAVITY
-    h = step_s
-    rz, rv, hx, hv, ed = inputs.road_z, inputs.road_vz, inputs.hub_x, inputs.hub_vx, inputs.edges
-    z_eq = _equilibrium_corner(lambda z: force(z, 0.0, hx[0], 0.0, 0.0, 0.0), mass_kg * g, unloaded_radius_m,
-                               mass_kg * g / stiffness_guess_n_m)
-    z = np.empty(n)
-    v = np.empty(n)
-    f = np.empty(n)
-    zn, vn = z_eq + initial_offset[0], float(initial_offset[1])
-    fn = force(zn, vn, hx[0], hv[0], rz[0], rv[0])
-    inv_m = 1.0 / mass_kg
-    an = fn * inv_m - g
-    z[0], v[0], f[0] = zn, vn, fn
-    half_h, half_h2 = 0.5 * h, 0.5 * h * h
-    jump = 0.0
-    impulses = []
-    for i in range(1, n):
-        zn1 = zn + h * vn + half_h2 * an
-        vp = vn + h * an - 0.5 * jump
-        if before_step is not None:
-            before_step(start_s + (i - 1) * h, h)
-        jump = 0.0
-        if ed[i]:
-            f_smooth = force(zn1, vp, hx[i], hv[i], rz[i], 0.0)
-        fn1 = force(zn1, vp, hx[i], hv[i], rz[i], rv[i])
-        if ed[i]:
-            jump = h * (fn1 - f_smooth) * inv_m
-            impulses.append((start_s + i * h, jump))
-        an1 = fn1 * inv_m - g
-        vn = vn + half_h * (an + an1)
-        zn, an = zn1, an1
-        z[i], v[i], f[i] = zn, vn, fn1
-    return Trajectory(time_s=start_s + h * np.arange(n), hub_z_m=z[None], hub_vz_m_s=v[None],
-                      hub_accel_m_s2=(f * inv_m - g)[None], force_n=f[None], step_s=h,
-                      static_hub_z_m=np.array([z_eq]), impulses=(tuple(impulses),))
+    weight = mass_kg * STANDARD_GRAVITY
+    z_eq = _equilibrium_corner(lambda z: force(z, 0.0, inputs.hub_x[0], 0.0, 0.0, 0.0), weight, unloaded_radius_m,
+                               weight / stiffness_guess_n_m)
+    return _run_body([force], [inputs], J=[[1.0]], mass=[mass_kg], static_z=[z_eq], loads_n=[weight],
+                     start_s=start_s, step_s=step_s, n=n, q0=[initial_offset[0]], dq0=[initial_offset[1]],
+                     before_step=before_step)
+
+
+def _run_body(forces, inputs: Sequence[TireInputs], *, J, mass, static_z, loads_n, start_s, step_s, n, q0, dq0,
+              before_step) -> Trajectory:
+    """The tires' :class:`TireInputs` as the model's inputs, stepped by the one scheme."""
+    from .model.stepping import run_body
+    from .model.tractor import Inputs
+
+    edges = tuple((i, t, start_s + i * step_s) for t, inp in enumerate(inputs)
+                  for i, edge in enumerate(inp.edges[:n]) if edge)
+    grid = Inputs(*(np.array([getattr(inp, name)[:n] for inp in inputs], dtype=float)
+                    for name in ("road_z", "road_vz", "hub_x", "hub_vx")), edges=edges)
+    return run_body(forces, J=np.asarray(J, dtype=float), mass=np.asarray(mass, dtype=float),
+                    static_z=np.asarray(static_z, dtype=float), loads_n=np.asarray(loads_n, dtype=float),
+                    inputs=grid, start_s=start_s, step_s=step_s, q0=q0, dq0=dq0, before_step=before_step)
 
 
 def half_tractor_geometry(load_front_n: float, load_rear_n: float, wheelbase_m: float, dynamic_index: float):
@@ -267,80 +249,22 @@ def run_half_tractor(forces: Sequence[ForceFn], *, loads_n: Sequence[float], whe
                      dynamic_index: float, start_s: float, step_s: float, n: int, inputs: Sequence[TireInputs],
                      unloaded_radii_m: Sequence[float], stiffness_guesses_n_m: Sequence[float],
                      before_step=None, initial_offset=((0.0, 0.0), (0.0, 0.0))) -> Trajectory:
-    """A half-tractor (heave z and pitch θ, nose-up) on a front and a rear tire, from static equilibrium.
+    """A half-tractor (heave z and pitch θ, nose-up) on a front and a rear tire, from static equilibrium:
+    the body of two coordinates stepped by :func:`identification.model.stepping.run_body`.
 
     Hub heights: front z + a θ, rear z − b θ (relative to their static heights).
     `initial_offset` gives ((front hub m, m/s), (rear hub m, m/s)) added at the start.
     """
-    g = STANDARD_GRAVITY
-    h = step_s
     mass, inertia, a, b = half_tractor_geometry(loads_n[0], loads_n[1], wheelbase_m, dynamic_index)
-    arm = (a, -b)
-    ff, fr = forces
-    inf, inr = inputs
     # static equilibrium: each tire carries its load (the CG makes the moments balance)
     z_eq = [_equilibrium_corner(lambda z, fn=fn, x=inp.hub_x[0]: fn(z, 0.0, x, 0.0, 0.0, 0.0), w, r0, w / k)
             for fn, inp, w, r0, k in zip(forces, inputs, loads_n, unloaded_radii_m, stiffness_guesses_n_m)]
-    zs = np.empty((2, n))
-    vs = np.empty((2, n))
-    fs = np.empty((2, n))
     (zf0, vf0), (zr0, vr0) = initial_offset
-    q, th = (b * zf0 + a * zr0) / (a + b), (zf0 - zr0) / (a + b)
-    dq, dth = (b * vf0 + a * vr0) / (a + b), (vf0 - vr0) / (a + b)
-    inv_m, inv_i = 1.0 / mass, 1.0 / inertia
-
-    def accelerations(f_front, f_rear):  # generalized accelerations, gravity excluded
-        return (f_front + f_rear) * inv_m, (a * f_front - b * f_rear) * inv_i
-
-    f0 = ff(z_eq[0] + q + a * th, dq + a * dth, inf.hub_x[0], inf.hub_vx[0], inf.road_z[0], inf.road_vz[0])
-    f1 = fr(z_eq[1] + q - b * th, dq - b * dth, inr.hub_x[0], inr.hub_vx[0], inr.road_z[0], inr.road_vz[0])
-    ddq, ddth = accelerations(f0, f1)
-    ddq -= g
-    zs[:, 0] = z_eq[0] + q + a * th, z_eq[1] + q - b * th
-    vs[:, 0] = dq + a * dth, dq - b * dth
-    fs[:, 0] = f0, f1
-    half_h, half_h2 = 0.5 * h, 0.5 * h * h
-    jq = jth = 0.0
-    impulses = ([], [])
-    for i in range(1, n):
-        q1 = q + h * dq + half_h2 * ddq
-        th1 = th + h * dth + half_h2 * ddth
-        dqp = dq + h * ddq - 0.5 * jq
-        dthp = dth + h * ddth - 0.5 * jth
-        if before_step is not None:
-            before_step(start_s + (i - 1) * h, h)
-        zf, zr = z_eq[0] + q1 + a * th1, z_eq[1] + q1 - b * th1
-        vf, vr = dqp + a * dthp, dqp - b * dthp
-        jq = jth = 0.0
-        fsm = [0.0, 0.0]
-        if inf.road_vz[i]:
-            fsm[0] = ff(zf, vf, inf.hub_x[i], inf.hub_vx[i], inf.road_z[i], 0.0)
-        if inr.road_vz[i]:
-            fsm[1] = fr(zr, vr, inr.hub_x[i], inr.hub_vx[i], inr.road_z[i], 0.0)
-        f0 = ff(zf, vf, inf.hub_x[i], inf.hub_vx[i], inf.road_z[i], inf.road_vz[i])
-        f1 = fr(zr, vr, inr.hub_x[i], inr.hub_vx[i], inr.road_z[i], inr.road_vz[i])
-        if inf.road_vz[i] or inr.road_vz[i]:
-            dfront = f0 - fsm[0] if inf.road_vz[i] else 0.0
-            drear = f1 - fsm[1] if inr.road_vz[i] else 0.0
-            jq, jth = accelerations(dfront, drear)
-            jq, jth = h * jq, h * jth
-            t_i = start_s + i * h
-            for k_tire, arm_k in enumerate(arm):
-                impulses[k_tire].append((t_i, jq + arm_k * jth))
-        ddq1, ddth1 = accelerations(f0, f1)
-        ddq1 -= g
-        dq = dq + half_h * (ddq + ddq1)
-        dth = dth + half_h * (ddth + ddth1)
-        q, th, ddq, ddth = q1, th1, ddq1, ddth1
-        zs[:, i] = z_eq[0] + q + a * th, z_eq[1] + q - b * th
-        vs[:, i] = dq + a * dth, dq - b * dth
-        fs[:, i] = f0, f1
-    acc_q = (fs[0] + fs[1]) * inv_m - g
-    acc_th = (a * fs[0] - b * fs[1]) * inv_i
-    acc = np.vstack([acc_q + a * acc_th, acc_q - b * acc_th])
-    return Trajectory(time_s=start_s + h * np.arange(n), hub_z_m=zs, hub_vz_m_s=vs, hub_accel_m_s2=acc,
-                      force_n=fs, step_s=h, static_hub_z_m=np.array(z_eq),
-                      impulses=(tuple(impulses[0]), tuple(impulses[1])))
+    q0 = [(b * zf0 + a * zr0) / (a + b), (zf0 - zr0) / (a + b)]
+    dq0 = [(b * vf0 + a * vr0) / (a + b), (vf0 - vr0) / (a + b)]
+    return _run_body(list(forces), list(inputs), J=[[1.0, a], [1.0, -b]], mass=[mass, inertia], static_z=z_eq,
+                     loads_n=list(loads_n), start_s=start_s, step_s=step_s, n=n, q0=q0, dq0=dq0,
+                     before_step=before_step)
 
 
 def lug_steady_state(*, masses_kg, stiffness_n_m, damping_n_s_m, lug_amplitude_m, lug_pitch_m, lug_phase_rad,
