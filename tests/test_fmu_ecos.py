@@ -19,7 +19,7 @@ try:  # ecospy loads its C library (which needs libtbb.so.12) when imported
 except ImportError as error:
     pytest.skip(f"ecospy is not installed ({error}); pip install ecospy", allow_module_level=True)
 except OSError as error:
-    pytest.skip(f"ecospy's native library does not load ({error}); on Debian: apt-get install libtbb12",
+    pytest.skip(f"ecospy's native library does not load ({error}); on Debian: apt-get install libtbb12 (CI: .ci/setup-debian)",
                 allow_module_level=True)
 
 KINDS = ("point_contact", "extended_tire")

@@ -69,8 +69,8 @@ def test_every_block_is_run_or_marked_and_ci_runs_the_quick_start():
     run = (ROOT / ".ci" / "run").read_text()
     assert "for name in main test" in run and "README.md" in run
     # chromium comes from CI's setup, before the tests, never from a test
-    assert run.index("bash .ci/setup-chromium") < run.index("for name in main test")
-    assert "apt-get install" in (ROOT / ".ci" / "setup-chromium").read_text()
+    assert run.index("bash .ci/setup-debian") < run.index("for name in main test")
+    assert "apt-get install" in (ROOT / ".ci" / "setup-debian").read_text()
     installs = re.compile(r"apt-get (?:update|install -y)")
     assert [p.name for p in (ROOT / "tests").glob("test_*.py")
             if p.name != Path(__file__).name and installs.search(p.read_text())] == []

@@ -163,10 +163,10 @@ def test_demo_recommends_one_joint_k_c_per_tire_within_the_truth(demo):
 
 
 def _chromium():
-    """The headless browser, installed by CI's setup (``.ci/setup-chromium``), never by a test; else skip."""
+    """The headless browser, installed by CI's setup (``.ci/setup-debian``), never by a test; else skip."""
     found = shutil.which("chromium") or shutil.which("chromium-browser")
     if not found:
-        pytest.skip("chromium is not installed (CI installs Debian's chromium with .ci/setup-chromium, as root)")
+        pytest.skip("chromium is not installed (CI installs Debian's chromium with .ci/setup-debian, as root)")
     return found
 
 
