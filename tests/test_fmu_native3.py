@@ -95,6 +95,29 @@ def test_fmi3_refused_value_is_fmi3Error_and_the_time_variable_reads_the_time(na
         s.freeInstance()
 
 
+@pytest.mark.parametrize("kind", KINDS)
+def test_fmi3_a_step_that_ends_beyond_the_largest_double_is_refused(native_fmus3, kind):
+    """fmi3DoStep(1e308, 1e308) would put the clock at inf: fmi3Error, and the time stays where it was."""
+    from fmpy.fmi1 import FMICallException
+
+    from fmpy import read_model_description
+
+    time_vr = next(v.valueReference for v in read_model_description(str(native_fmus3[kind])).modelVariables
+                   if v.causality == "independent")
+    messages = []
+    s = open_fmi3_slave(native_fmus3[kind], log_message=lambda env, status, category, message: messages.append(
+        message.decode()))
+    try:
+        s.doStep(0.0, 0.25)
+        with pytest.raises(FMICallException) as info:
+            s.doStep(1e308, 1e308)
+        assert info.value.status == 3  # fmi3Error
+        assert any("must end at a finite time" in m for m in messages), messages
+        assert s.getFloat64([time_vr]) == [0.25]
+    finally:
+        s.freeInstance()
+
+
 def test_fmi3_fmu_under_an_awkward_path_and_byte_identical_re_export(native_fmus3, tmp_path):
     from fmpy import simulate_fmu
 

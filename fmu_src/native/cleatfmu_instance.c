@@ -180,8 +180,9 @@ int ci_set(CleatfmuInstance *s, const char *function, CleatfmuVarType type, cons
 
 int ci_do_step(CleatfmuInstance *s, const char *function, double current, double step) {
     if (!ci_allowed(s, function, CI_STEP)) return CI_ERROR;
-    if (!(step >= 0.0) || !isfinite(current) || !isfinite(step))
-        return ci_fail(s, "%s: invalid communication point %.17g or step size %.17g", function, current, step);
+    if (!(step >= 0.0) || !isfinite(current) || !isfinite(step) || !isfinite(current + step))
+        return ci_fail(s, "%s: invalid communication point %.17g or step size %.17g (the step must end at a "
+                          "finite time)", function, current, step);
     if (ci_check_parameters(s) != CI_OK) return CI_ERROR;
     if (N_STATES > 0) {
         char msg[CLEATFMU_MESSAGE_SIZE];
