@@ -109,6 +109,12 @@ def analyse(job) -> dict:
              "c_in": bool(d.get("c_ci") and d["c_ci"][0] <= tt["c"] <= d["c_ci"][1]),
              "k_half": (d["k_ci"][1] - d["k_ci"][0]) / 2 / d["k"] if d.get("k_ci") else None,
              "at_noise": d.get("unexplained") is None, "source": d.get("k_source", "joint_fit"),
+             "share": (d.get("unexplained") or {}).get("share", 0.0),
+             "undetermined_flag": bool((d.get("free_decay_check") or {}).get("undetermined")),
+             "k_range_in": bool((d.get("free_decay_check") or {}).get("k_range") and
+                                d["free_decay_check"]["k_range"][0] <= tt["k"] <= d["free_decay_check"]["k_range"][1]),
+             "c_range_in": bool((d.get("free_decay_check") or {}).get("c_range") and
+                                d["free_decay_check"]["c_range"][0] <= tt["c"] <= d["free_decay_check"]["c_range"][1]),
              "undetermined": bool(not d.get("k_ci") or not all(map(np.isfinite, d["k_ci"]))
                                   or (d["k_ci"][1] - d["k_ci"][0]) / 2 > 0.5 * d["k"])}
         wt = (wave or {}).get("tires", {}).get(w) or {}

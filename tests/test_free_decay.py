@@ -77,3 +77,33 @@ def test_a_disagreement_with_the_channel_fit_is_said_even_where_it_is_no_check(c
     assert all(check[t]["reason"] is None for t in ("FL", "FR", "RR"))
     diag.extra["free_decay"] = check
     assert diag.to_json()["tires"]["RL"]["k"] == k                      # the joint fit's value stands
+
+
+def test_a_channel_the_model_leaves_largely_unexplained_gets_the_range_searched(corners):
+    """RL's k 1.6x its truth (a model that does not describe that hub), a body named (the free decay is then
+    no check to fall back on): the misfit left in RL's channel is far beyond UNDETERMINED_SHARE of its
+    signal, so RL's intervals are the whole range searched, which holds the truth, and a warning gives the
+    share; the other tires keep their joint intervals.  (Without a body, the free decay's values would be
+    reported instead.)"""
+    from identification.diagnose.free_decay import UNDETERMINED_SHARE
+    from identification.diagnose.joint_fit import unexplained
+
+    run, pb, start, fit = corners
+    params = {**fit.params, "k_RL": 1.6 * run.truth["tires"]["RL"]["k"]}
+    pred = fit.model.predict(params)
+    wrong = dataclasses.replace(fit, params=params, prediction=pred)
+    diag = dataclasses.replace(_diagnosis(pb, start, fit, wrong), effects=["axle_coupling"],
+                               unexplained={t: unexplained(pb, pred, t) for t in pb.channels})
+    assert diag.unexplained["RL"]["share"] > UNDETERMINED_SHARE
+    assert all(diag.unexplained[t] is None for t in ("FL", "FR", "RR"))
+    diag.extra["free_decay"] = check = free_decay_check(diag)
+    assert check["RL"].get("undetermined") and not any(check[t].get("undetermined") for t in ("FL", "FR", "RR"))
+    doc = diag.to_json()["tires"]
+    rl, truth = doc["RL"], run.truth["tires"]["RL"]
+    assert rl["k"] == params["k_RL"] and rl["k_source"] == "joint_fit"            # the value stands
+    assert rl["k_ci"][0] <= truth["k"] <= rl["k_ci"][1] and rl["c_ci"][0] <= truth["c"] <= rl["c_ci"][1]
+    assert rl["k_ci"][1] / rl["k_ci"][0] > 10                                      # not determined
+    for t in ("FL", "FR", "RR"):
+        assert doc[t]["k_source"] == "joint_fit" and doc[t]["k_ci"] == pytest.approx(list(fit.ci[f"k_{t}"]))
+    warning = [w for w in diagnosis_warnings(diag, _NoGain()) if "of this channel's signal unexplained" in w]
+    assert len(warning) == 1 and warning[0].startswith("RL") and "not determined by the data" in warning[0]

@@ -20,6 +20,14 @@ friction the model does not know) has collapsed: that is no measurement.  The ti
 the channel's own fit's (:func:`~identification.diagnose.joint_start.tire_start`: the waveform fit, the
 paper's method or the ringing frequency), ``"k_source": "channel_fit"``, each interval the whole range
 searched around it (the data do not narrow it), and a warning says so with the residual left.
+
+A joint fit that leaves more than :data:`UNDETERMINED_SHARE` of a channel's signal energy unexplained
+(beyond the noise) is no measurement of that tire either: its model does not describe what the hub did
+(seen on recordings of another simulator: a slow pass over a cleat the footprint model does not envelope
+alike, shares of 20-90 % with k off by 40-1400 % against intervals of ±10-40 %).  Unless the free decay
+gives the tire's values, they stay the joint fit's, but each interval is the whole range searched
+(``"undetermined": true`` in the check, and a warning with the share): the interval the data support.
+Every check entry carries that range (``k_range``, ``c_range``).
 """
 
 from __future__ import annotations
@@ -31,7 +39,11 @@ from ..preprocess import preprocess
 from ..recording import STANDARD_GRAVITY
 from ..waveform import identify_waveform
 
-__all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS"]
+__all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS", "UNDETERMINED_SHARE"]
+
+#: A channel the final model leaves this share of its signal energy unexplained (beyond the noise) is not
+#: measured by it: its k and c intervals are the range searched.
+UNDETERMINED_SHARE = 0.2
 
 #: Named, these make the free decay a body's mode, not the tire's.
 BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
@@ -94,7 +106,34 @@ def free_decay_check(diag) -> dict:
                  f"the joint fit's lie outside its interval (k {100 * (fin.params[f'k_{tire}'] / entry['k'] - 1):+.1f} "
                  f"%, c {100 * (fin.params[f'c_{tire}'] / entry['c'] - 1):+.1f} %), which is stretched to hold them")
         out[tire] = entry
+    for tire, entry in out.items():
+        entry.update(_searched(diag, tire))
+        _undetermined(diag, tire, entry)
     return out
+
+
+def _searched(diag, tire: str) -> dict:
+    """The range the joint fit searched for the tire's k and c (the final model's bounds around its start)."""
+    fin, start = diag.final, diag.extra.get("start") or {}
+    around = {n: start.get(n, fin.params[n]) for n in (f"k_{tire}", f"c_{tire}")}
+    lo, hi = fin.model.bounds({**fin.params, **around})
+    return {f"{q}_range": [float(lo[f"{q}_{tire}"]), float(hi[f"{q}_{tire}"])] for q in "kc"}
+
+
+def _undetermined(diag, tire: str, entry: dict) -> None:
+    """Mark the tire's values undetermined (intervals: the range searched) where the final model leaves more
+    than :data:`UNDETERMINED_SHARE` of its channel unexplained, unless the free decay or the channel's own fit
+    already gives them."""
+    left = diag.unexplained.get(tire)
+    if entry.get("prefer") or not left or left["share"] <= UNDETERMINED_SHARE:
+        return
+    entry["undetermined"] = True
+    fin = diag.final
+    sentence = (f"{tire}: the model leaves {left['share']:.0%} of this channel's signal unexplained "
+                f"({left['residual_to_noise']:.1f}x the noise, in {left['window'][0]:.2f}-{left['window'][1]:.2f} s): "
+                f"its k {fin.params[f'k_{tire}'] / 1e3:.1f} kN/m and c {fin.params[f'c_{tire}'] / 1e3:.3g} kN s/m "
+                f"are not determined by the data, each interval is the whole range searched")
+    entry["reason"] = f"{entry['reason']}; {sentence}" if entry.get("reason") else sentence
 
 
 def _compare(fin, tire: str, entry: dict, other: str) -> list:
@@ -153,9 +192,13 @@ def reported(value: float, ci, check: dict, q: str) -> tuple[float, list]:
     """The tire's value and interval of quantity `q` ('k' or 'c'): the joint fit's, or, where the joint fit's k
     or c lies outside the free decay's interval, the free decay's with its interval stretched to hold the
     joint fit's estimate too; where the joint fit collapsed (:func:`collapsed`), the channel's own fit's with
-    the range searched."""
+    the range searched; where the model leaves too much of the channel unexplained (``undetermined``), the
+    joint fit's with the range searched."""
     if check.get("collapsed"):
         return float(check[q]), [float(v) for v in check[f"{q}_ci"]]
+    if check.get("undetermined"):
+        lo, hi = check[f"{q}_range"]
+        return float(value), [float(min(value, lo)), float(max(value, hi))]
     if not check.get("valid") or not check.get("prefer"):
         return float(value), [float(v) for v in ci]
     lo, hi = check[f"{q}_ci"]
