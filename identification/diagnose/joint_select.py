@@ -203,25 +203,6 @@ def _candidate_start(model: TractorFitModel, current: TractorFit, start0: dict) 
     return {name: s[name] for name in model.names}
 
 
-#: Ratio of an axle's two channel-fit stiffnesses above which a body candidate also starts from their mean.
-AXLE_SPREAD = 1.3
-
-
-def axle_means(start0: dict, channels) -> dict:
-    """k and c of each axle's tires at their geometric mean, for the axles whose two tires' starting k differ
-    by more than :data:`AXLE_SPREAD` (a tractor's tires on one axle are alike and loaded alike); {} if none."""
-    out = {}
-    for pair in (("FL", "FR"), ("RL", "RR")):
-        if not set(pair) <= set(channels):
-            continue
-        ks = [start0[f"k_{t}"] for t in pair]
-        if max(ks) > AXLE_SPREAD * min(ks):
-            for q in "kc":
-                mean = math.sqrt(start0[f"{q}_{pair[0]}"] * start0[f"{q}_{pair[1]}"])
-                out.update({f"{q}_{t}": mean for t in pair})
-    return out
-
-
 def _try(job):
     effects, current, new, start0 = job
     model = TractorFitModel(effects, current.model.problem)
@@ -233,11 +214,6 @@ def _try(job):
         fresh = [dict(start, **{n: start0[n] for n in model.names if n[:2] in ("k_", "c_")},
                       **{n: timing[n] for n in ("arrival", "stagger", "delay") if n in model.names})
                  for timing in timings]
-        # the channels' own fits read the other wheels' impacts into their k (a hub rolling with the body
-        # rings at another frequency): where one axle's two fits disagree, its tires start from their mean
-        evened = axle_means(start0, model.problem.channels)
-        if evened:
-            fresh += [dict(s, **evened) for s in fresh]
         options = [body_start(model, s, step_s=SCREEN_STEP_S) for s in [start] + fresh]
         # a scan cannot tell a wrong timing from a right one while the tires are still off (seen: the right
         # timing's scan 2x the wrong one's, its fit 400x lower): fit every option
