@@ -47,7 +47,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
-from .scheme import Trajectory, cleat_grid, lug_steady_state, run_corner, run_half_tractor, tire_inputs
+from .master import _WARNING, fmi_error, step_body_fmus, step_fn
+from .scheme import Trajectory, cleat_grid, corner_body, grid_inputs, half_tractor_body, lug_steady_state, tire_inputs
 
 __all__ = ["TireFmu", "step_fn", "run_quarter_tractor", "run_half_tractor_fmus"]
 
@@ -189,33 +190,9 @@ class TireFmu:
         self.close()
 
 
-def step_fn(tires):
-    """``do_steps(t_n, h)``: one ``fmi2DoStep(t_n, h)`` of each tire, in order (the ``before_step`` callback)."""
-    calls = [(t._raw.do_step, t._raw.component) for t in tires]
-    t_now, size, true = ctypes.c_double(), ctypes.c_double(), ctypes.c_int(1)
-
-    def do_steps(t_n, h):
-        t_now.value = t_n
-        size.value = h
-        for do_step, c in calls:
-            status = do_step(c, t_now, size, true)
-            if status > _WARNING:
-                raise fmi_error("fmi2DoStep", status)
-    return do_steps
-
-
-#: fmi2Warning: a larger status is a failed call (as fmpy's wrappers judge it).
-_WARNING = 1
 #: The FMU's own functions with the return type only: called with every argument a ctypes object of the
 #: C type (fmi2Component, arrays, size_t, fmi2Real, fmi2Boolean), so ctypes converts nothing per call.
 _FMI_CALL = ctypes.CFUNCTYPE(ctypes.c_int)
-
-
-def fmi_error(function: str, status: int) -> Exception:
-    """fmpy's error for a failed FMI call (status above fmi2Warning)."""
-    from fmpy.fmi1 import FMICallException
-
-    return FMICallException(function=function, status=status)
 
 
 class _RawFmi2:
@@ -304,9 +281,9 @@ def run_quarter_tractor(fmu_path, *, mass_kg: float, speed_m_s: float, cleat_hei
                                       speed_m_s=speed_m_s, arrival_s=[arrival_s - params.get("cleat_x", 0.0)
                                                                        / speed_m_s], t0_s=start)[0]
         wall = time.perf_counter()
-        traj = run_corner(tire.force_fn(), mass_kg=mass_kg, start_s=start, step_s=h, n=n, inputs=inputs,
-                          unloaded_radius_m=params["unloaded_radius"], stiffness_guess_n_m=params["stiffness"],
-                          before_step=step_fn([tire]), initial_offset=offset)
+        body = corner_body(tire.force_fn(), mass_kg=mass_kg, inputs=inputs, unloaded_radius_m=params["unloaded_radius"],
+                           stiffness_guess_n_m=params["stiffness"], initial_offset=offset)
+        traj = step_body_fmus([tire], inputs=grid_inputs([inputs], start, h, n), start_s=start, step_s=h, **body)
         wall = time.perf_counter() - wall
     if not np.all(np.isfinite(traj.force_n)):
         raise InputError(fmu_path, "the co-simulation diverged (non-finite tire force)")
@@ -348,11 +325,11 @@ def run_half_tractor_fmus(fmu_paths, *, loads_n, wheelbase_m: float, dynamic_ind
                 arrival_s=[arrival_s + lag - p.get("cleat_x", 0.0) / speed_m_s for p, lag in zip(params, (0.0, delay))],
                 t0_s=start, wheelbase_m=wheelbase_m, dynamic_index=dynamic_index, loads_n=loads_n)
         wall = time.perf_counter()
-        traj = run_half_tractor([t.force_fn() for t in tires], loads_n=loads_n, wheelbase_m=wheelbase_m,
-                                dynamic_index=dynamic_index, start_s=start, step_s=h, n=n, inputs=inputs,
-                                unloaded_radii_m=[p["unloaded_radius"] for p in params],
-                                stiffness_guesses_n_m=[p["stiffness"] for p in params], before_step=step_fn(tires),
-                                initial_offset=offset)
+        body = half_tractor_body([t.force_fn() for t in tires], loads_n=loads_n, wheelbase_m=wheelbase_m,
+                                 dynamic_index=dynamic_index, inputs=inputs,
+                                 unloaded_radii_m=[p["unloaded_radius"] for p in params],
+                                 stiffness_guesses_n_m=[p["stiffness"] for p in params], initial_offset=offset)
+        traj = step_body_fmus(list(tires), inputs=grid_inputs(inputs, start, h, n), start_s=start, step_s=h, **body)
         wall = time.perf_counter() - wall
     if not np.all(np.isfinite(traj.force_n)):
         raise InputError(fmu_paths[0], "the co-simulation diverged (non-finite tire force)")

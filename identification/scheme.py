@@ -31,7 +31,7 @@ import numpy as np
 from .recording import STANDARD_GRAVITY
 
 __all__ = ["cleat_grid", "TireInputs", "tire_inputs", "Trajectory", "run_corner", "run_half_tractor",
-           "half_tractor_geometry", "lug_steady_state"]
+           "corner_body", "half_tractor_body", "grid_inputs", "half_tractor_geometry", "lug_steady_state"]
 
 #: force(hub_z m, hub_vz m/s, hub_x m, hub_vx m/s, road_z m, road_vz m/s) -> force N
 ForceFn = Callable[[float, float, float, float, float, float], float]
@@ -188,49 +188,57 @@ def _equilibrium_corner(force: Callable[[float], float], weight: float, z_guess:
     return brentq(lambda z: force(z) - weight, z_lo, z_hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
 
 
-def run_corner(force: ForceFn, *, mass_kg: float, start_s: float, step_s: float, n: int, inputs: TireInputs,
-               unloaded_radius_m: float, stiffness_guess_n_m: float, before_step=None,
-               initial_offset=(0.0, 0.0)) -> Trajectory:
-    """A corner mass m under gravity on one tire, from static equilibrium: the body of one coordinate
-    stepped by :func:`identification.model.stepping.run_body` (the one stepping scheme).
-
-    Parameters
-    ----------
-    force : callable
-        Tire force for hub and road motion (see :data:`ForceFn`).
-    mass_kg : float
-    start_s, step_s, n : float, float, int
-        The grid (see :func:`cleat_grid`).
-    inputs : TireInputs
-    unloaded_radius_m, stiffness_guess_n_m : float
-        Start of the equilibrium search.
-    before_step : callable, optional
-        ``before_step(t_n, h)``, called before each step (an FMU's ``doStep``).
-    initial_offset : (float, float)
-        Hub height (m) and velocity (m/s) added to the static equilibrium at
-        the start (a periodic steady state, see :func:`lug_steady_state`).
-    """
+def corner_body(force: ForceFn, *, mass_kg: float, inputs: TireInputs, unloaded_radius_m: float,
+                stiffness_guess_n_m: float, initial_offset=(0.0, 0.0)) -> dict:
+    """A corner mass m on one tire as a body of :func:`identification.model.stepping.run_body`: ``J``,
+    ``mass``, ``static_z`` (where the tire's force law carries m g), ``loads_n``, ``q0``, ``dq0``
+    (`initial_offset`: hub height m and velocity m/s added to the static equilibrium, e.g. a periodic
+    steady state, see :func:`lug_steady_state`)."""
     weight = mass_kg * STANDARD_GRAVITY
     z_eq = _equilibrium_corner(lambda z: force(z, 0.0, inputs.hub_x[0], 0.0, 0.0, 0.0), weight, unloaded_radius_m,
                                weight / stiffness_guess_n_m)
-    return _run_body([force], [inputs], J=[[1.0]], mass=[mass_kg], static_z=[z_eq], loads_n=[weight],
-                     start_s=start_s, step_s=step_s, n=n, q0=[initial_offset[0]], dq0=[initial_offset[1]],
-                     before_step=before_step)
+    return {"J": np.ones((1, 1)), "mass": np.array([float(mass_kg)]), "static_z": np.array([z_eq]),
+            "loads_n": np.array([weight]), "q0": [float(initial_offset[0])], "dq0": [float(initial_offset[1])]}
 
 
-def _run_body(forces, inputs: Sequence[TireInputs], *, J, mass, static_z, loads_n, start_s, step_s, n, q0, dq0,
-              before_step) -> Trajectory:
-    """The tires' :class:`TireInputs` as the model's inputs, stepped by the one scheme."""
-    from .model.stepping import run_body
+def half_tractor_body(forces: Sequence[ForceFn], *, loads_n: Sequence[float], wheelbase_m: float,
+                      dynamic_index: float, inputs: Sequence[TireInputs], unloaded_radii_m: Sequence[float],
+                      stiffness_guesses_n_m: Sequence[float], initial_offset=((0.0, 0.0), (0.0, 0.0))) -> dict:
+    """A half-tractor (heave z and pitch θ, nose-up) on a front and a rear tire as a body of ``run_body``:
+    hub heights front z + a θ, rear z − b θ from their static heights (each tire carrying its load: the CG
+    makes the moments balance); `initial_offset` ((front hub m, m/s), (rear hub m, m/s))."""
+    mass, inertia, a, b = half_tractor_geometry(loads_n[0], loads_n[1], wheelbase_m, dynamic_index)
+    z_eq = [_equilibrium_corner(lambda z, fn=fn, x=inp.hub_x[0]: fn(z, 0.0, x, 0.0, 0.0, 0.0), w, r0, w / k)
+            for fn, inp, w, r0, k in zip(forces, inputs, loads_n, unloaded_radii_m, stiffness_guesses_n_m)]
+    (zf0, vf0), (zr0, vr0) = initial_offset
+    return {"J": np.array([[1.0, a], [1.0, -b]]), "mass": np.array([mass, inertia]), "static_z": np.array(z_eq),
+            "loads_n": np.asarray(loads_n, dtype=float),
+            "q0": [(b * zf0 + a * zr0) / (a + b), (zf0 - zr0) / (a + b)],
+            "dq0": [(b * vf0 + a * vr0) / (a + b), (vf0 - vr0) / (a + b)]}
+
+
+def grid_inputs(inputs: Sequence[TireInputs], start_s: float, step_s: float, n: int):
+    """The tires' :class:`TireInputs` as the model's :class:`~identification.model.tractor.Inputs`."""
     from .model.tractor import Inputs
 
     edges = tuple((i, t, start_s + i * step_s) for t, inp in enumerate(inputs)
                   for i, edge in enumerate(inp.edges[:n]) if edge)
-    grid = Inputs(*(np.array([getattr(inp, name)[:n] for inp in inputs], dtype=float)
+    return Inputs(*(np.array([getattr(inp, name)[:n] for inp in inputs], dtype=float)
                     for name in ("road_z", "road_vz", "hub_x", "hub_vx")), edges=edges)
-    return run_body(forces, J=np.asarray(J, dtype=float), mass=np.asarray(mass, dtype=float),
-                    static_z=np.asarray(static_z, dtype=float), loads_n=np.asarray(loads_n, dtype=float),
-                    inputs=grid, start_s=start_s, step_s=step_s, q0=q0, dq0=dq0, before_step=before_step)
+
+
+def run_corner(force: ForceFn, *, mass_kg: float, start_s: float, step_s: float, n: int, inputs: TireInputs,
+               unloaded_radius_m: float, stiffness_guess_n_m: float, before_step=None,
+               initial_offset=(0.0, 0.0)) -> Trajectory:
+    """A corner mass m under gravity on one tire (a force callback), from static equilibrium:
+    :func:`corner_body` stepped by :func:`identification.model.stepping.run_body` (the one scheme).
+    `before_step` ``(t_n, h)`` is called before each step; the grid is :func:`cleat_grid`'s."""
+    from .model.stepping import run_body
+
+    body = corner_body(force, mass_kg=mass_kg, inputs=inputs, unloaded_radius_m=unloaded_radius_m,
+                       stiffness_guess_n_m=stiffness_guess_n_m, initial_offset=initial_offset)
+    return run_body([force], inputs=grid_inputs([inputs], start_s, step_s, n), start_s=start_s, step_s=step_s,
+                    before_step=before_step, **body)
 
 
 def half_tractor_geometry(load_front_n: float, load_rear_n: float, wheelbase_m: float, dynamic_index: float):
@@ -249,22 +257,15 @@ def run_half_tractor(forces: Sequence[ForceFn], *, loads_n: Sequence[float], whe
                      dynamic_index: float, start_s: float, step_s: float, n: int, inputs: Sequence[TireInputs],
                      unloaded_radii_m: Sequence[float], stiffness_guesses_n_m: Sequence[float],
                      before_step=None, initial_offset=((0.0, 0.0), (0.0, 0.0))) -> Trajectory:
-    """A half-tractor (heave z and pitch θ, nose-up) on a front and a rear tire, from static equilibrium:
-    the body of two coordinates stepped by :func:`identification.model.stepping.run_body`.
+    """A half-tractor on a front and a rear tire (force callbacks), from static equilibrium:
+    :func:`half_tractor_body` stepped by :func:`identification.model.stepping.run_body`."""
+    from .model.stepping import run_body
 
-    Hub heights: front z + a θ, rear z − b θ (relative to their static heights).
-    `initial_offset` gives ((front hub m, m/s), (rear hub m, m/s)) added at the start.
-    """
-    mass, inertia, a, b = half_tractor_geometry(loads_n[0], loads_n[1], wheelbase_m, dynamic_index)
-    # static equilibrium: each tire carries its load (the CG makes the moments balance)
-    z_eq = [_equilibrium_corner(lambda z, fn=fn, x=inp.hub_x[0]: fn(z, 0.0, x, 0.0, 0.0, 0.0), w, r0, w / k)
-            for fn, inp, w, r0, k in zip(forces, inputs, loads_n, unloaded_radii_m, stiffness_guesses_n_m)]
-    (zf0, vf0), (zr0, vr0) = initial_offset
-    q0 = [(b * zf0 + a * zr0) / (a + b), (zf0 - zr0) / (a + b)]
-    dq0 = [(b * vf0 + a * vr0) / (a + b), (vf0 - vr0) / (a + b)]
-    return _run_body(list(forces), list(inputs), J=[[1.0, a], [1.0, -b]], mass=[mass, inertia], static_z=z_eq,
-                     loads_n=list(loads_n), start_s=start_s, step_s=step_s, n=n, q0=q0, dq0=dq0,
-                     before_step=before_step)
+    body = half_tractor_body(forces, loads_n=loads_n, wheelbase_m=wheelbase_m, dynamic_index=dynamic_index,
+                             inputs=inputs, unloaded_radii_m=unloaded_radii_m,
+                             stiffness_guesses_n_m=stiffness_guesses_n_m, initial_offset=initial_offset)
+    return run_body(list(forces), inputs=grid_inputs(inputs, start_s, step_s, n), start_s=start_s,
+                    step_s=step_s, before_step=before_step, **body)
 
 
 def lug_steady_state(*, masses_kg, stiffness_n_m, damping_n_s_m, lug_amplitude_m, lug_pitch_m, lug_phase_rad,

@@ -115,8 +115,13 @@ def free_decay_check(diag) -> dict:
 def _searched(diag, tire: str) -> dict:
     """The range the joint fit searched for the tire's k and c (the final model's bounds around its start)."""
     fin, start = diag.final, diag.extra.get("start") or {}
-    around = {n: start.get(n, fin.params[n]) for n in (f"k_{tire}", f"c_{tire}")}
-    lo, hi = fin.model.bounds({**fin.params, **around})
+    return _range_around(fin, tire, start.get(f"k_{tire}", fin.params[f"k_{tire}"]),
+                         start.get(f"c_{tire}", fin.params[f"c_{tire}"]))
+
+
+def _range_around(fin, tire: str, k: float, c: float) -> dict:
+    """``{"k_range", "c_range"}``: the final model's bounds of the tire's k and c around the values k, c."""
+    lo, hi = fin.model.bounds({**fin.params, f"k_{tire}": k, f"c_{tire}": c})
     return {f"{q}_range": [float(lo[f"{q}_{tire}"]), float(hi[f"{q}_{tire}"])] for q in "kc"}
 
 
@@ -171,10 +176,9 @@ def _channel_fit_instead(diag, tire: str) -> dict:
 
     fin = diag.final
     k, c = tire_start(diag.problem, tire)
-    lo, hi = fin.model.bounds({**fin.params, f"k_{tire}": k, f"c_{tire}": c})
+    rng = _range_around(fin, tire, k, c)
     entry = {"valid": False, "why_not": "the joint fit collapsed", "collapsed": True, "prefer": True,
-             "agree": False, "k": float(k), "c": float(c), "k_ci": [float(lo[f"k_{tire}"]), float(hi[f"k_{tire}"])],
-             "c_ci": [float(lo[f"c_{tire}"]), float(hi[f"c_{tire}"])]}
+             "agree": False, "k": float(k), "c": float(c), "k_ci": rng["k_range"], "c_ci": rng["c_range"]}
     left = diag.unexplained.get(tire)
     residual = (f"it leaves {left['residual_to_noise']:.1f}x the noise" if left else
                 "its residual is at the noise floor")

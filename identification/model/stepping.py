@@ -13,9 +13,9 @@ At a grid point carrying a point-contact edge the force is also read with
 the road rate set to zero; the difference is the damper's impulse, which
 makes the hub velocity jump (j = h M⁻¹ Jᵀ ΔF, half of which the trapezoidal
 update has already spread into the step) and is recorded so that the
-trajectory's velocity jumps at the edge time itself.  The single-FMU masters' corner and
-half-tractor (:func:`identification.scheme.run_corner`, :func:`~identification.scheme.run_half_tractor`)
-are this scheme with one and two coordinates.
+trajectory's velocity jumps at the edge time itself.  A corner and a half-tractor
+(:func:`identification.scheme.corner_body`, :func:`~identification.scheme.half_tractor_body`) are bodies of
+one and two coordinates; :func:`identification.master.step_body_fmus` is this scheme with the FMI calls inline.
 
 :mod:`identification.model.kernels` runs the same operations, in the same
 order, compiled; the two agree to round-off (tested ≤ 1e-12).
