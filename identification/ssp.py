@@ -47,7 +47,8 @@ BODY = "body"
 ROAD = "road"
 SSD_NAME = "SystemStructure.ssd"
 _NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
-       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon"}
+       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+       "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations"}
 #: (body connector, tire connector, direction) per tire T; "out" = body -> tire.
 CONNECTIONS = (("hub_z_{t}", "hub_z", "out"), ("hub_vz_{t}", "hub_vz", "out"), ("hub_x_{t}", "hub_x", "out"),
                ("hub_vx", "hub_vx", "out"), ("force_{t}", "force_z", "in"))
@@ -290,5 +291,10 @@ def ssd_bytes(name: str, description: str, *, start_s: float, stop_s: float, ste
     annotations = ET.SubElement(experiment, f"{{{d}}}Annotations")
     note = ET.SubElement(annotations, f"{{{c}}}Annotation", {"type": "org.cleatfmu.experiment"})
     ET.SubElement(note, "Step", {"size": repr(float(step_s)), "exchange": "any"})
+    # the step as the Open Simulation Platform's hosts read it (libcosim: without it, an execution created
+    # from the SSP alone has no algorithm)
+    osp = ET.SubElement(annotations, f"{{{c}}}Annotation", {"type": "com.opensimulationplatform"})
+    ET.SubElement(ET.SubElement(osp, f"{{{_NS['osp']}}}Algorithm"), f"{{{_NS['osp']}}}FixedStepAlgorithm",
+                  {"baseStepSize": repr(float(step_s))})
     ET.indent(root, space="  ")
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True) + b"\n"

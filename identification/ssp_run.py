@@ -35,7 +35,7 @@ import numpy as np
 
 from .ssp import _NS, BODY, SSD_NAME
 
-__all__ = ["EXCHANGES", "read_system", "run_ssp_fmpy", "run_ssp_libcosim", "master_reference", "BODY_OUTPUTS",
+__all__ = ["EXCHANGES", "read_system", "ssd_step", "run_ssp_fmpy", "run_ssp_libcosim", "master_reference", "BODY_OUTPUTS",
            "AGREEMENT", "relative_deviation", "check_ssp"]
 
 EXCHANGES = ("sequential", "parallel")
@@ -144,12 +144,27 @@ def run_ssp_fmpy(ssp_path, *, step_s: float, stop_s: float | None = None, exchan
     return out
 
 
-def run_ssp_libcosim(ssp_path, *, step_s: float, stop_s: float | None = None, outputs=BODY_OUTPUTS) -> dict:
+def ssd_step(ssp_path) -> float:
+    """The communication step (s) the SSP's default experiment gives its hosts (the Open Simulation
+    Platform's ``osp:FixedStepAlgorithm`` annotation)."""
+    with zipfile.ZipFile(ssp_path) as z:
+        root = ET.fromstring(z.read(SSD_NAME))
+    algorithm = root.find("ssd:DefaultExperiment/ssd:Annotations/ssc:Annotation/osp:Algorithm/"
+                          "osp:FixedStepAlgorithm", _NS)
+    if algorithm is None:
+        raise ValueError(f"{ssp_path}: the SSD gives its hosts no step (no osp:FixedStepAlgorithm)")
+    return float(algorithm.get("baseStepSize"))
+
+
+def run_ssp_libcosim(ssp_path, *, step_s: float | None, stop_s: float | None = None, outputs=BODY_OUTPUTS) -> dict:
     """Run the system in libcosim's fixed-step algorithm (libcosimpy); returns the body's outputs.
 
     libcosim reads the SSP itself (its SSP parser) and exchanges once per step
     after every component stepped: the ``"parallel"`` exchange.  Row i ≥ 1 holds
-    the outputs after the i-th step; row 0 those after initialization.
+    the outputs after the i-th step; row 0 those after initialization.  With
+    ``step_s=None`` libcosim takes the step from the SSP itself (its
+    ``osp:FixedStepAlgorithm`` annotation, :func:`ssd_step`), as a user of the
+    SSP alone would run it.
     """
     from libcosimpy.CosimEnums import CosimExecutionState
     from libcosimpy.CosimExecution import CosimExecution
@@ -158,6 +173,8 @@ def run_ssp_libcosim(ssp_path, *, step_s: float, stop_s: float | None = None, ou
 
     _, _, (start, stop) = read_system(ssp_path)
     stop = stop if stop_s is None else float(stop_s)
+    own_step = step_s is None
+    step_s = ssd_step(ssp_path) if own_step else step_s
     step_ns = round(step_s * 1e9)
     if not math.isclose(step_ns * 1e-9, step_s, rel_tol=1e-12):
         raise ValueError(f"step {step_s} s is not a whole number of nanoseconds")
@@ -166,7 +183,7 @@ def run_ssp_libcosim(ssp_path, *, step_s: float, stop_s: float | None = None, ou
     with tempfile.TemporaryDirectory(prefix="cleatfmu_cosim_") as tmp:
         with zipfile.ZipFile(ssp_path) as z:
             z.extractall(tmp)
-        execution = CosimExecution.from_ssp_file(str(Path(tmp)), step_size=step_ns)
+        execution = CosimExecution.from_ssp_file(str(Path(tmp)), step_size=None if own_step else step_ns)
         index = execution.slave_index_from_instance_name(BODY)
         refs = {v.name.decode(): v.reference for v in execution.slave_variables(index)}
         vrs = [refs[o] for o in outputs]

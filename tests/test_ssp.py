@@ -3,7 +3,9 @@ C master without Python, against the project's master and against the linear sys
 
 from __future__ import annotations
 
+import json
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,7 +15,7 @@ from identification.model.tractor import Body
 from identification.recording import TIRES
 from identification.ssp import write_tractor_ssp
 from identification.ssp_run import (master_reference, read_system, relative_deviation, run_ssp_fmpy,
-                                     run_ssp_libcosim)
+                                     run_ssp_libcosim, ssd_step)
 from identification.tire_law import EXTENDED_DEFAULTS
 from native_fixtures import _compile_host, extract, guid
 
@@ -110,6 +112,28 @@ def test_libcosim_runs_the_ssp_like_the_projects_master_with_its_exchange(system
     # the one-step delay of the exchange is visible, and small at 1 ms
     delay_effect = relative_deviation(other, ref, ["seat_z"])
     assert 1e-6 < delay_effect < 0.05
+
+
+def test_libcosim_runs_the_ssp_from_the_ssp_alone(system, tmp_path):
+    """A libcosim execution created from the SSP with no step given takes the step from its
+    osp:FixedStepAlgorithm annotation (without it, libcosim crashed): the same run as with the step given.
+    In a child process, so that a crash there fails this test instead of ending the session."""
+    import subprocess
+    import sys
+
+    record, path = system
+    assert ssd_step(path) == STEP
+    script = (f"import json, sys; sys.path.insert(0, {str(Path(__file__).resolve().parents[1])!r}); "
+              "from identification.ssp_run import run_ssp_libcosim; "
+              f"out = run_ssp_libcosim({str(path)!r}, step_s=None, stop_s=0.5); "
+              "print(json.dumps({k: [float(x) for x in v[1:]] for k, v in out.items()}))")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    own = json.loads(proc.stdout)
+    given = run_ssp_libcosim(path, step_s=STEP, stop_s=0.5)
+    assert len(own["time"]) == 500
+    for name in ("time", "seat_z", "hub_z_FL", "hub_z_RR"):
+        assert np.array_equal(np.array(own[name]), given[name][1:]), name
 
 
 def test_a_c_master_without_python_runs_the_ssp(system, tmp_path_factory, tmp_path):
