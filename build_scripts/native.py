@@ -32,16 +32,18 @@ from .kinds import FmuKind
 __all__ = ["PLATFORMS", "FMI_VERSIONS", "cache_dir", "source_files", "law_version", "compile_binary",
            "compile_binaries", "config_problems"]
 
-#: FMI version -> {platform folder in binaries/: (zig target, file extension)}.
+#: FMI version -> {platform folder in binaries/: (zig target, file extension)}.  The macOS targets name their
+#: oldest release (the cross-compiler's default is its newest SDK's, 15.0, which older Macs refuse to load):
+#: 10.13 for Intel, 11.0 (the first) for Apple silicon; Linux binaries link against glibc 2.17.
 PLATFORMS = {
     2: {"linux64": ("x86_64-linux-gnu.2.17", ".so"),
         "win64": ("x86_64-windows-gnu", ".dll"),
-        "darwin64": ("x86_64-macos", ".dylib")},
+        "darwin64": ("x86_64-macos.10.13", ".dylib")},
     3: {"x86_64-linux": ("x86_64-linux-gnu.2.17", ".so"),
         "aarch64-linux": ("aarch64-linux-gnu.2.17", ".so"),
         "x86_64-windows": ("x86_64-windows-gnu", ".dll"),
-        "x86_64-darwin": ("x86_64-macos", ".dylib"),
-        "aarch64-darwin": ("aarch64-macos", ".dylib")},
+        "x86_64-darwin": ("x86_64-macos.10.13", ".dylib"),
+        "aarch64-darwin": ("aarch64-macos.11.0", ".dylib")},
 }
 FMI_VERSIONS = tuple(PLATFORMS)
 

@@ -8,7 +8,7 @@ import zipfile
 
 import numpy as np
 import pytest
-from native_fixtures import AWKWARD_DIR, extract, native_fmus3  # noqa: F401
+from native_fixtures import AWKWARD_DIR, extract, native_fmus, native_fmus3  # noqa: F401
 
 from build_scripts import build_fmu, load_kind
 from build_scripts.binary_exports import exported_names, fmi_function_names
@@ -31,6 +31,35 @@ def machine(data: bytes) -> tuple[str, int]:
     if data[:2] == b"MZ":
         return "pe", struct.unpack_from("<H", data, struct.unpack_from("<I", data, 0x3C)[0] + 4)[0]
     return "macho", struct.unpack_from("<I", data, 4)[0]
+
+
+def macos_minimum(data: bytes) -> tuple[int, int]:
+    """The oldest macOS release a Mach-O binary declares it runs on: (major, minor), from its
+    LC_BUILD_VERSION (minos) or LC_VERSION_MIN_MACOSX load command."""
+    ncmds = struct.unpack_from("<I", data, 16)[0]
+    offset = 32                                   # a 64-bit Mach-O header
+    for _ in range(ncmds):
+        cmd, size = struct.unpack_from("<II", data, offset)
+        if cmd in (0x32, 0x24):                   # LC_BUILD_VERSION: platform, minos; LC_VERSION_MIN_MACOSX: version
+            version = struct.unpack_from("<I", data, offset + (12 if cmd == 0x32 else 8))[0]
+            return version >> 16, (version >> 8) & 0xFF
+        offset += size
+    raise AssertionError("no minimum macOS version in the binary")
+
+
+def test_macos_binaries_run_on_macos_10_13_intel_and_11_apple_silicon(native_fmus, native_fmus3):
+    """The cross-compiler's default minimum is its newest SDK's (macOS 15), which every older Mac refuses."""
+    oldest = {"darwin64": (10, 13), "x86_64-darwin": (10, 13), "aarch64-darwin": (11, 0)}
+    seen = []
+    for fmus in (native_fmus, native_fmus3):
+        for kind in KINDS:
+            with zipfile.ZipFile(fmus[kind]) as z:
+                for name in z.namelist():
+                    parts = name.split("/")
+                    if parts[0] == "binaries" and parts[1] in oldest and name.endswith(".dylib"):
+                        assert macos_minimum(z.read(name)) <= oldest[parts[1]], (kind, name, macos_minimum(z.read(name)))
+                        seen.append(parts[1])
+    assert sorted(set(seen)) == sorted(oldest)
 
 
 @pytest.mark.parametrize("kind", KINDS)
