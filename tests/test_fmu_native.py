@@ -405,3 +405,48 @@ def test_closing_a_tire_fmu_that_was_never_initialized_frees_it_without_an_error
         other.initialize(0.0)
         assert other.parameters()["stiffness"] > 0
     assert other.slave is None
+
+
+def test_an_fmu_state_of_another_kind_or_corrupted_is_refused(native_fmus):
+    """States carry their kind: an extended-tire state set into a point-contact instance (and the reverse)
+    is fmi2Error, never installed (it once installed k = -1.15 N/m); a serialized state with any bit flipped
+    or cut short is refused by its checksum, and the instance keeps its own state."""
+    from fmpy.fmi1 import FMICallException
+
+    messages = []
+    log = (lambda status, category, message: messages.append(message))
+    point = open_fmpy_slave(native_fmus["point_contact"], instance_name="point", logger=log)
+    ext = open_fmpy_slave(native_fmus["extended_tire"], instance_name="ext", logger=log)
+    try:
+        k_vr = variable_refs(native_fmus["point_contact"])["stiffness"][0]
+        k_before = point.getReal([k_vr])[0]
+        for target, source in ((point, ext), (ext, point)):
+            foreign = source.getFMUstate()
+            with pytest.raises(FMICallException) as info:
+                target.setFMUstate(foreign)
+            assert info.value.status == 3
+            source.freeFMUstate(foreign)
+        assert sum("not an FMU state of this FMU" in m for m in messages) == 2, messages
+        assert point.getReal([k_vr])[0] == k_before
+        blob = bytes(point.serializeFMUstate(point.getFMUstate()))
+        point.setFMUstate(point.deSerializeFMUstate(blob))       # the intact copy is accepted
+        rng = np.random.default_rng(7)
+        accepted = 0
+        for trial in range(2000):
+            bad = bytearray(blob)
+            for bit in rng.choice(8 * len(bad), size=1 + trial % 4, replace=False):
+                bad[bit // 8] ^= 1 << (bit % 8)
+            try:
+                point.deSerializeFMUstate(bytes(bad))
+                accepted += 1
+            except FMICallException:
+                pass
+        for cut in (1, 8, len(blob) // 2):
+            with pytest.raises(FMICallException):
+                point.deSerializeFMUstate(blob[:-cut])
+        assert accepted == 0
+        assert point.getReal([k_vr])[0] == k_before
+    finally:
+        for s in (point, ext):
+            s.terminate()
+            s.freeInstance()

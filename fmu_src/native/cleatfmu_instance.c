@@ -10,13 +10,19 @@
 #define STATE_MAGIC "CLEATFMU"
 #define KIND_BYTES 32
 /* Serialized state: magic, kind (32 bytes), header (4 bytes LE: number of values | unchecked << 16),
- * time, values (the variables, then the hidden state; native little-endian doubles). */
-#define SERIALIZED_SIZE (8 + KIND_BYTES + 4 + 8 * (1 + N_VALUES))
+ * time, values (the variables, then the hidden state; native little-endian doubles), and a 64-bit FNV-1a
+ * checksum of all that (8 bytes LE): a corrupted or truncated copy is refused, not installed. */
+#define PAYLOAD_SIZE (8 + KIND_BYTES + 4 + 8 * (1 + N_VALUES))
+#define SERIALIZED_SIZE (PAYLOAD_SIZE + 8)
 
 /* A snapshot belongs to the instance that made it, in that instance's list: freeing the instance frees the
- * snapshots the importer did not free (fmi2FreeInstance / fmi3FreeInstance free "all the allocated memory"). */
+ * snapshots the importer did not free (fmi2FreeInstance / fmi3FreeInstance free "all the allocated memory").
+ * Its kind and number of values sit right after the magic, at the same offset in every kind's snapshot, so a
+ * state of another kind (another layout and size) is recognised and refused before anything else is read. */
 typedef struct Snapshot {
     char magic[8];
+    char kind[KIND_BYTES];
+    int n_values;
     double time;
     int unchecked;
     double values[N_VALUES];
@@ -195,8 +201,33 @@ int ci_do_step(CleatfmuInstance *s, const char *function, double current, double
 
 /* ---------------------------------------------------------------- FMU state */
 
+static void kind_bytes(char kind[KIND_BYTES]) {
+    memset(kind, 0, KIND_BYTES);
+    strncpy(kind, MODEL_KIND, KIND_BYTES - 1);
+}
+
 static int is_snapshot(const void *state) {
-    return state != NULL && memcmp(((const Snapshot *)state)->magic, STATE_MAGIC, 8) == 0;
+    char kind[KIND_BYTES];
+    const Snapshot *snap = (const Snapshot *)state;
+    if (state == NULL || memcmp(snap->magic, STATE_MAGIC, 8) != 0) return 0;
+    kind_bytes(kind);
+    return memcmp(snap->kind, kind, KIND_BYTES) == 0 && snap->n_values == N_VALUES;
+}
+
+static void stamp(Snapshot *snap) {
+    memcpy(snap->magic, STATE_MAGIC, 8);
+    kind_bytes(snap->kind);
+    snap->n_values = N_VALUES;
+}
+
+static unsigned long long fnv1a(const unsigned char *data, size_t n) {
+    unsigned long long h = 1469598103934665603ULL;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        h ^= data[i];
+        h *= 1099511628211ULL;
+    }
+    return h;
 }
 
 int ci_get_state(CleatfmuInstance *s, const char *function, void **state) {
@@ -206,7 +237,7 @@ int ci_get_state(CleatfmuInstance *s, const char *function, void **state) {
     if (*state != NULL && !is_snapshot(*state)) return ci_fail(s, "%s: not an FMU state of this FMU", function);
     snap = *state ? (Snapshot *)*state : new_snapshot(s);
     if (snap == NULL) return ci_fail(s, "%s: out of memory", function);
-    memcpy(snap->magic, STATE_MAGIC, 8);
+    stamp(snap);
     snap->time = s->time;
     snap->unchecked = s->unchecked;
     memcpy(snap->values, s->values, sizeof s->values);
@@ -237,15 +268,11 @@ int ci_free_state(CleatfmuInstance *s, const char *function, void **state) {
 
 size_t ci_serialized_size(void) { return SERIALIZED_SIZE; }
 
-static void kind_bytes(char kind[KIND_BYTES]) {
-    memset(kind, 0, KIND_BYTES);
-    strncpy(kind, MODEL_KIND, KIND_BYTES - 1);
-}
-
 int ci_serialize(CleatfmuInstance *s, const char *function, const void *state, unsigned char *buffer, size_t size) {
     const Snapshot *snap = (const Snapshot *)state;
     char kind[KIND_BYTES];
     unsigned long header;
+    unsigned long long sum;
     int i;
     if (!ci_allowed(s, function, CI_ANY_MODE)) return CI_ERROR;
     if (!is_snapshot(state)) return ci_fail(s, "%s: not an FMU state of this FMU", function);
@@ -258,6 +285,8 @@ int ci_serialize(CleatfmuInstance *s, const char *function, const void *state, u
     for (i = 0; i < 4; i++) buffer[8 + KIND_BYTES + i] = (unsigned char)((header >> (8 * i)) & 0xffUL);
     memcpy(buffer + 12 + KIND_BYTES, &snap->time, 8);
     memcpy(buffer + 20 + KIND_BYTES, snap->values, 8 * N_VALUES);
+    sum = fnv1a(buffer, PAYLOAD_SIZE);
+    for (i = 0; i < 8; i++) buffer[PAYLOAD_SIZE + i] = (unsigned char)((sum >> (8 * i)) & 0xffULL);
     return CI_OK;
 }
 
@@ -266,17 +295,22 @@ int ci_deserialize(CleatfmuInstance *s, const char *function, const unsigned cha
     char kind[KIND_BYTES], msg[CLEATFMU_MESSAGE_SIZE];
     unsigned long header = 0;
     Snapshot *snap, tmp;
+    unsigned long long sum = 0;
     size_t vr;
     int i;
     if (!ci_allowed(s, function, CI_ANY_MODE)) return CI_ERROR;
     kind_bytes(kind);
-    if (buffer != NULL && size == SERIALIZED_SIZE)
+    if (buffer != NULL && size == SERIALIZED_SIZE) {
         for (i = 3; i >= 0; i--) header = (header << 8) | buffer[8 + KIND_BYTES + i];
+        for (i = 7; i >= 0; i--) sum = (sum << 8) | buffer[PAYLOAD_SIZE + i];
+    }
     if (buffer == NULL || state == NULL || size != SERIALIZED_SIZE || memcmp(buffer, STATE_MAGIC, 8) != 0
-        || memcmp(buffer + 8, kind, KIND_BYTES) != 0 || (header & 0xffffUL) != N_VALUES)
+        || memcmp(buffer + 8, kind, KIND_BYTES) != 0 || (header & 0xffffUL) != N_VALUES || (header >> 17) != 0)
         return ci_fail(s, "%s: not a serialized state of FMU kind %s", function, MODEL_KIND);
+    if (sum != fnv1a(buffer, PAYLOAD_SIZE))
+        return ci_fail(s, "%s: the serialized state is corrupted (its checksum does not match)", function);
     if (*state != NULL && !is_snapshot(*state)) return ci_fail(s, "%s: not an FMU state of this FMU", function);
-    memcpy(tmp.magic, STATE_MAGIC, 8);
+    stamp(&tmp);
     tmp.unchecked = (header & 0x10000UL) != 0;
     memcpy(&tmp.time, buffer + 12 + KIND_BYTES, 8);
     memcpy(tmp.values, buffer + 20 + KIND_BYTES, 8 * N_VALUES);
@@ -285,7 +319,7 @@ int ci_deserialize(CleatfmuInstance *s, const char *function, const unsigned cha
             return ci_fail(s, "%s: %s", function, msg);
     snap = *state ? (Snapshot *)*state : new_snapshot(s);
     if (snap == NULL) return ci_fail(s, "%s: out of memory", function);
-    memcpy(snap->magic, tmp.magic, 8);
+    stamp(snap);
     snap->time = tmp.time;
     snap->unchecked = tmp.unchecked;
     memcpy(snap->values, tmp.values, sizeof tmp.values);
