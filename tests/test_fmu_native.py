@@ -410,7 +410,8 @@ def test_closing_a_tire_fmu_that_was_never_initialized_frees_it_without_an_error
 def test_an_fmu_state_of_another_kind_or_corrupted_is_refused(native_fmus):
     """States carry their kind: an extended-tire state set into a point-contact instance (and the reverse)
     is fmi2Error, never installed (it once installed k = -1.15 N/m); a serialized state with any bit flipped
-    or cut short is refused by its checksum, and the instance keeps its own state."""
+    or cut short is refused by its checksum, one of another layout version (with a valid checksum) by its
+    header, and the instance keeps its own state."""
     from fmpy.fmi1 import FMICallException
 
     messages = []
@@ -445,6 +446,19 @@ def test_an_fmu_state_of_another_kind_or_corrupted_is_refused(native_fmus):
             with pytest.raises(FMICallException):
                 point.deSerializeFMUstate(blob[:-cut])
         assert accepted == 0
+
+        def fnv1a(data):            # the documented checksum, written out: FNV-1a 64 of all but the last 8 bytes
+            h = 1469598103934665603
+            for byte in data:
+                h = ((h ^ byte) * 1099511628211) % (1 << 64)
+            return h.to_bytes(8, "little")
+
+        assert blob[-8:] == fnv1a(blob[:-8])
+        other_version = bytearray(blob[:-8])
+        other_version[8 + 32 + 3] ^= 0x01                       # the layout version, top byte of the header
+        with pytest.raises(FMICallException):
+            point.deSerializeFMUstate(bytes(other_version) + fnv1a(other_version))
+        assert "not a serialized state of FMU kind point_contact" in messages[-1]
         assert point.getReal([k_vr])[0] == k_before
     finally:
         for s in (point, ext):

@@ -9,7 +9,10 @@
 
 #define STATE_MAGIC "CLEATFMU"
 #define KIND_BYTES 32
-/* Serialized state: magic, kind (32 bytes), header (4 bytes LE: number of values | unchecked << 16),
+/* Version of the serialized layout below (a state of another version is refused). */
+#define STATE_VERSION 2UL
+/* Serialized state: magic, kind (32 bytes), header (4 bytes LE: number of values | unchecked << 16 |
+ * STATE_VERSION << 24),
  * time, values (the variables, then the hidden state; native little-endian doubles), and a 64-bit FNV-1a
  * checksum of all that (8 bytes LE): a corrupted or truncated copy is refused, not installed. */
 #define PAYLOAD_SIZE (8 + KIND_BYTES + 4 + 8 * (1 + N_VALUES))
@@ -281,7 +284,7 @@ int ci_serialize(CleatfmuInstance *s, const char *function, const void *state, u
     kind_bytes(kind);
     memcpy(buffer, STATE_MAGIC, 8);
     memcpy(buffer + 8, kind, KIND_BYTES);
-    header = (unsigned long)N_VALUES | (snap->unchecked ? 0x10000UL : 0UL);
+    header = (unsigned long)N_VALUES | (snap->unchecked ? 0x10000UL : 0UL) | (STATE_VERSION << 24);
     for (i = 0; i < 4; i++) buffer[8 + KIND_BYTES + i] = (unsigned char)((header >> (8 * i)) & 0xffUL);
     memcpy(buffer + 12 + KIND_BYTES, &snap->time, 8);
     memcpy(buffer + 20 + KIND_BYTES, snap->values, 8 * N_VALUES);
@@ -305,7 +308,8 @@ int ci_deserialize(CleatfmuInstance *s, const char *function, const unsigned cha
         for (i = 7; i >= 0; i--) sum = (sum << 8) | buffer[PAYLOAD_SIZE + i];
     }
     if (buffer == NULL || state == NULL || size != SERIALIZED_SIZE || memcmp(buffer, STATE_MAGIC, 8) != 0
-        || memcmp(buffer + 8, kind, KIND_BYTES) != 0 || (header & 0xffffUL) != N_VALUES || (header >> 17) != 0)
+        || memcmp(buffer + 8, kind, KIND_BYTES) != 0 || (header & 0xffffUL) != N_VALUES || ((header >> 17) & 0x7fUL) != 0
+        || (header >> 24) != STATE_VERSION)
         return ci_fail(s, "%s: not a serialized state of FMU kind %s", function, MODEL_KIND);
     if (sum != fnv1a(buffer, PAYLOAD_SIZE))
         return ci_fail(s, "%s: the serialized state is corrupted (its checksum does not match)", function);
