@@ -47,7 +47,7 @@ PLATFORMS = {
 }
 FMI_VERSIONS = tuple(PLATFORMS)
 
-_COMMON = ("cleatfmu_law.h", "cleatfmu_law.c", "cleatfmu_body.h", "cleatfmu_body.c", "cleatfmu_road.h",
+_COMMON = ("cleatfmu_names.h", "cleatfmu_law.h", "cleatfmu_law.c", "cleatfmu_body.h", "cleatfmu_body.c", "cleatfmu_road.h",
            "cleatfmu_road.c", "cleatfmu_model.h", "cleatfmu_model.c", "cleatfmu_resources.h",
            "cleatfmu_resources.c", "cleatfmu_instance.h", "cleatfmu_instance.c")
 _FMI_LAYER = {2: ("fmi2_functions.c",), 3: ("fmi3_functions.c", "fmi3_unsupported.c")}

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+import re
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -464,3 +466,96 @@ def test_an_fmu_state_of_another_kind_or_corrupted_is_refused(native_fmus):
         for s in (point, ext):
             s.terminate()
             s.freeInstance()
+
+
+def test_every_kind_links_statically_into_one_program_from_its_sources(tmp_path):
+    """The four kinds' sources/ (the files their model descriptions list), each compiled with its own
+    FMI2_FUNCTION_PREFIX and warnings as errors, link into one C program without a clash (the shared names
+    are the kind's own), and each kind run there gives its FMU's outputs (fmpy, the shipped binary)."""
+    import shutil
+    import subprocess
+
+    from fmpy import read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    gcc = shutil.which("gcc")
+    if gcc is None:
+        pytest.skip("gcc is not installed")
+    kinds = {"point_contact": "pc", "extended_tire": "ext", "tractor_body": "body", "road_profile": "road"}
+    objects, runs = [], {}
+    for kind, prefix in kinds.items():
+        fmu = build_fmu(kind, tmp_path / f"{kind}.fmu", backend="native")
+        folder = extract(fmu, tmp_path / kind)
+        md = read_model_description(str(fmu), validate=False)
+        with zipfile.ZipFile(fmu) as z:   # the files the model description's SourceFiles lists
+            sources = re.findall(r'<File name="([^"]+)"', z.read("modelDescription.xml").decode())
+        assert sources and all(name.endswith(".c") for name in sources)
+        for name in sources:
+            obj = tmp_path / f"{prefix}_{name[:-2]}.o"
+            subprocess.run([gcc, "-c", "-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror",
+                            f"-DFMI2_FUNCTION_PREFIX={prefix}_", "-I", str(folder / "sources"), "-o", str(obj),
+                            str(folder / "sources" / name)], check=True, capture_output=True)
+            objects.append(str(obj))
+        outputs = [v for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
+        runs[kind] = (prefix, fmu, folder, md, outputs)
+    host = tmp_path / "static_host"
+    linked = subprocess.run([gcc, "-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror", "-I",
+                             str(_fmpy_headers()), "-o", str(host),
+                             str(Path(__file__).with_name("native_static_host.c")), *objects, "-lm"],
+                            capture_output=True, text=True)
+    assert linked.returncode == 0, linked.stderr[-3000:]
+    steps, h = 40, 0.005
+    for kind, (prefix, fmu, folder, md, outputs) in runs.items():
+        vrs = [v.valueReference for v in outputs]
+        done = subprocess.run([str(host), prefix, (folder / "resources").as_uri(), md.guid, str(steps), repr(h),
+                               *map(str, vrs)], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, (kind, done.stderr)
+        static = np.array([[float(x) for x in line.split()] for line in done.stdout.splitlines()])
+        slave = FMU2Slave(guid=md.guid, unzipDirectory=str(folder), modelIdentifier=md.coSimulation.modelIdentifier,
+                          instanceName=prefix)
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        shipped = [slave.getReal(vrs)]
+        for k in range(steps):
+            slave.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+            shipped.append(slave.getReal(vrs))
+        slave.terminate()
+        slave.freeInstance()
+        shipped = np.array(shipped)
+        assert static.shape == shipped.shape == (steps + 1, len(vrs)), kind
+        scale = np.maximum(np.max(np.abs(shipped), axis=0), 1e-300)
+        assert np.all(np.abs(static - shipped) <= 1e-12 * scale), (kind, np.max(np.abs(static - shipped) / scale))
+
+
+def test_every_kind_compiles_for_fmi3_with_its_own_prefix_and_no_shared_global_name(tmp_path):
+    """FMI 3.0: the four kinds' sources/ (their buildDescription.xml's files), each with its own
+    FMI3_FUNCTION_PREFIX, define no global symbol twice between them, and every FMI function carries its
+    kind's prefix (``nm`` on the objects)."""
+    import shutil
+    import subprocess
+
+    gcc, nm = shutil.which("gcc"), shutil.which("nm")
+    if gcc is None or nm is None:
+        pytest.skip("gcc or nm is not installed")
+    owners = {}
+    for kind, prefix in {"point_contact": "pc", "extended_tire": "ext", "tractor_body": "body",
+                         "road_profile": "road"}.items():
+        fmu = build_fmu(kind, tmp_path / f"{kind}.fmu", backend="native", fmi_version=3)
+        folder = extract(fmu, tmp_path / kind)
+        description = (folder / "sources" / "buildDescription.xml").read_text()
+        sources = re.findall(r'<SourceFile name="([^"]+)"', description)
+        assert sources
+        for name in sources:
+            obj = tmp_path / f"{prefix}_{name[:-2]}.o"
+            subprocess.run([gcc, "-c", "-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror",
+                            f"-DFMI3_FUNCTION_PREFIX={prefix}_", "-I", str(folder / "sources"), "-o", str(obj),
+                            str(folder / "sources" / name)], check=True, capture_output=True)
+            listed = subprocess.run([nm, "-g", "--defined-only", str(obj)], capture_output=True, text=True,
+                                    check=True).stdout
+            for symbol in (line.split()[-1] for line in listed.splitlines() if line.strip()):
+                assert symbol not in owners, (symbol, owners.get(symbol), kind)
+                owners[symbol] = kind
+                assert not symbol.startswith("fmi3"), (kind, symbol)      # prefixed: pc_fmi3DoStep, ...
+    assert {"pc_fmi3DoStep", "ext_fmi3DoStep", "body_fmi3DoStep", "road_fmi3DoStep"} <= set(owners)

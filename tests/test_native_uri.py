@@ -24,7 +24,8 @@ def uri_to_path(tmp_path_factory):
                     str(native.joinpath("point_contact")), "-I", str(_fmpy_headers()), "-o", str(lib),
                     str(native.joinpath("cleatfmu_resources.c")), str(native.joinpath("cleatfmu_model.c")),
                     str(native.joinpath("cleatfmu_law.c")), "-lm"], check=True)
-    f = ctypes.CDLL(str(lib)).cleatfmu_uri_to_path
+    # the shared names carry the kind's model identifier (fmu_src/native/cleatfmu_names.h)
+    f = getattr(ctypes.CDLL(str(lib)), "CleatfmuPointContact_cleatfmu_uri_to_path")
     f.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_size_t, ctypes.c_char_p, ctypes.c_size_t]
 
     def decode(uri: str):

@@ -15,6 +15,8 @@
 #ifndef CLEATFMU_BODY_H
 #define CLEATFMU_BODY_H
 
+#include "cleatfmu_names.h"
+
 #include "cleatfmu_model.h"
 
 #if MODEL_BODY

@@ -8,6 +8,8 @@
 #ifndef CLEATFMU_INSTANCE_H
 #define CLEATFMU_INSTANCE_H
 
+#include "cleatfmu_names.h"
+
 #include <stddef.h>
 
 #include "cleatfmu_model.h"

@@ -9,6 +9,8 @@
 #ifndef CLEATFMU_LAW_H
 #define CLEATFMU_LAW_H
 
+#include "cleatfmu_names.h"
+
 /* Parameters of the extended tire; the defaults of each option switch it off. */
 typedef struct {
     double stiffness;          /* k, N/m (> 0; tangent at static_load when the exponent != 1) */

@@ -9,6 +9,8 @@
 #ifndef CLEATFMU_MODEL_H
 #define CLEATFMU_MODEL_H
 
+#include "cleatfmu_names.h"
+
 #include <stddef.h>
 
 typedef enum { VT_REAL, VT_BOOLEAN } CleatfmuVarType;

@@ -2,6 +2,8 @@
 #ifndef CLEATFMU_RESOURCES_H
 #define CLEATFMU_RESOURCES_H
 
+#include "cleatfmu_names.h"
+
 #include <stddef.h>
 
 /* Name of the start-value file in the FMU's resources folder. */

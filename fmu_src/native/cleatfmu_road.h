@@ -9,6 +9,8 @@
 #ifndef CLEATFMU_ROAD_H
 #define CLEATFMU_ROAD_H
 
+#include "cleatfmu_names.h"
+
 #include <stddef.h>
 
 #include "cleatfmu_model.h"

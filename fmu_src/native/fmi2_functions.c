@@ -15,6 +15,16 @@
 #include "fmi2Functions.h"
 #include "cleatfmu_instance.h"
 
+#if defined(FMI2_FUNCTION_PREFIX)
+/* The FMI 2.0 standard header prepends FMI2_FUNCTION_PREFIX to every function name (for static linking of
+ * several FMUs); the bundled copy defines fmi2FullName(name) as name.  The definitions below take the
+ * prefix as the standard header gives it. */
+#undef fmi2FullName
+#define fmi2Paste(a, b) a##b
+#define fmi2PasteB(a, b) fmi2Paste(a, b)
+#define fmi2FullName(name) fmi2PasteB(FMI2_FUNCTION_PREFIX, name)
+#endif
+
 #define S(c) ((CleatfmuInstance *)(c))
 #define STATUS(x) ((fmi2Status)(x))
 

@@ -2,6 +2,9 @@
  * uniform or parabolic footprint pressure), lugs, progressive stiffness, friction and unilateral contact.
  * The variable table must match VARIABLES of fmu_src/extended_tire (checked by the build);
  * new variables are appended, so that the value references of the others never change. */
+#ifndef CLEATFMU_CONFIG_H
+#define CLEATFMU_CONFIG_H
+
 #define MODEL_IDENTIFIER CleatfmuExtendedTire
 #define MODEL_KIND "extended_tire"
 #define MODEL_EXTENDED 1
@@ -45,3 +48,5 @@ enum {
     {"road_effective_z", VT_REAL, VC_OUTPUT, RULE_NONE, "m"}, \
     {"parabolic_pressure", VT_BOOLEAN, VC_PARAMETER, RULE_BOOLEAN, ""}, \
     {"cleat_bevel", VT_REAL, VC_PARAMETER, RULE_NONNEGATIVE, "m"}
+
+#endif

@@ -1,5 +1,8 @@
 /* FMU kind point_contact: spring k parallel to damper c between hub and road.
  * The variable table must match VARIABLES of fmu_src/point_contact (checked by the build). */
+#ifndef CLEATFMU_CONFIG_H
+#define CLEATFMU_CONFIG_H
+
 #define MODEL_IDENTIFIER CleatfmuPointContact
 #define MODEL_KIND "point_contact"
 #define MODEL_EXTENDED 0
@@ -22,3 +25,5 @@ enum {
     {"deflection", VT_REAL, VC_OUTPUT, RULE_NONE, "m"}, \
     {"deflection_rate", VT_REAL, VC_OUTPUT, RULE_NONE, "m/s"}, \
     {"in_contact", VT_BOOLEAN, VC_OUTPUT, RULE_NONE, ""}
+
+#endif

@@ -1,6 +1,9 @@
 /* FMU kind road_profile: a two-track road profile under the four tires of the tractor (a table in the
  * FMU's resources), the hubs moving at a constant speed.
  * The variable table must match VARIABLES of fmu_src/road_profile (checked by the build). */
+#ifndef CLEATFMU_CONFIG_H
+#define CLEATFMU_CONFIG_H
+
 #define MODEL_IDENTIFIER CleatfmuRoadProfile
 #define MODEL_KIND "road_profile"
 #define MODEL_EXTENDED 0
@@ -28,3 +31,5 @@ enum {
     {"road_vz_FR", VT_REAL, VC_OUTPUT, RULE_NONE, "m/s"}, \
     {"road_vz_RL", VT_REAL, VC_OUTPUT, RULE_NONE, "m/s"}, \
     {"road_vz_RR", VT_REAL, VC_OUTPUT, RULE_NONE, "m/s"}
+
+#endif

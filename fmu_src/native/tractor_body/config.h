@@ -2,6 +2,9 @@
  * pivoting front axle; or half tractors per side or axle, or four corners) on four tire forces,
  * with hub and seat outputs.
  * The variable table must match VARIABLES of fmu_src/tractor_body (checked by the build). */
+#ifndef CLEATFMU_CONFIG_H
+#define CLEATFMU_CONFIG_H
+
 #define MODEL_IDENTIFIER CleatfmuTractorBody
 #define MODEL_KIND "tractor_body"
 #define MODEL_EXTENDED 0
@@ -82,3 +85,5 @@ enum { ST_Q = N_VARIABLES, ST_DQP = ST_Q + 4, ST_DQ = ST_DQP + 4, ST_DDQ = ST_DQ
     {"hub_az_RR", VT_REAL, VC_OUTPUT, RULE_NONE, "m/s2"}, \
     {"seat_z", VT_REAL, VC_OUTPUT, RULE_NONE, "m"}, \
     {"seat_az", VT_REAL, VC_OUTPUT, RULE_NONE, "m/s2"}
+
+#endif
