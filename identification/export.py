@@ -320,12 +320,33 @@ def add_parser(subparsers) -> None:
     p.add_argument("--platforms", default=None, metavar="P1,P2",
                    help="comma-separated platforms of a native FMU (default: all; FMI 2.0: linux64,win64,darwin64; "
                         "FMI 3.0: x86_64-linux,aarch64-linux,x86_64-windows,x86_64-darwin,aarch64-darwin)")
+    p.add_argument("--format", default="fmu", choices=("fmu", "tir", "chrono-json"),
+                   help="fmu (default); tir: an MF-Tyre property file with the vertical stiffness and damping; "
+                        "chrono-json: a Chrono tire JSON with them (needs --base)")
+    p.add_argument("--base", metavar="FILE", default=None,
+                   help="with --format tir or chrono-json: the supplier's .tir or a Chrono tire JSON whose vertical "
+                        "stiffness and damping are set; every other byte is kept")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     """Run ``cleatfmu export``; returns 0 (user errors raise InputError)."""
+    import sys
+
     _, tire, entry = read_identified(args.params, args.tire, accept_out_of_range=args.accept_out_of_range)
+    if args.format != "fmu" or args.base is not None:
+        from .tire_files import FORMATS, export_tire_file
+
+        if args.format == "fmu":
+            raise InputError("--base", "patches a .tir or a Chrono tire JSON: use it with --format tir or chrono-json")
+        output = Path(args.output) if args.output else Path(f"{tire}{FORMATS[args.format]}")
+        path, notes = export_tire_file(args.params, output, fmt=args.format, tire=tire, base=args.base,
+                                       unloaded_radius_m=args.unloaded_radius_m,
+                                       accept_out_of_range=args.accept_out_of_range)
+        for note in notes:
+            print(f"cleatfmu: warning: {note}", file=sys.stderr)
+        print(f"wrote {path}: tire {tire}, stiffness {entry['k']:.6g} N/m, damping {entry['c']:.6g} N.s/m")
+        return 0
     output = Path(args.output) if args.output else Path(f"{tire}.fmu")
     platforms = None if args.platforms is None else [p.strip() for p in args.platforms.split(",") if p.strip()]
     _check_backend(args.backend, args.fmi_version, platforms)
