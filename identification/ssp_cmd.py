@@ -71,9 +71,15 @@ def run(args) -> int:
             raise InputError(args.body, str(exc)) from None
         check = None
         if args.check:
+            import sys
+
             from .ssp_run import check_ssp
+            libcosim = libcosim_available()
+            if not libcosim:
+                print("cleatfmu: warning: --check: libcosimpy is not installed (pip install libcosimpy): the "
+                      "archive is checked in fmpy only", file=sys.stderr)
             check = check_ssp(staged, record, start_s=start, step_s=h, stop_s=stop, seat_x_m=seat_x,
-                              seat_y=args.seat_y)
+                              seat_y=args.seat_y, libcosim=libcosim)
         write_files({Path(args.output): staged.read_bytes()})
     doc = {"ssp": str(args.output), "start_s": start, "stop_s": stop, "step_s": h, "body": body.kind,
            "seat_x_m": seat_x, "seat_y": args.seat_y, "point_contact_as_builtin": converted, "check": check}
@@ -95,6 +101,13 @@ def run(args) -> int:
                 print(f"  {host}: largest deviation from the project's master {dev:.2e} of the motion  "
                       + ("OK" if dev <= AGREEMENT else f"DIFFERS (more than {AGREEMENT:g})"))
     return _status(check)
+
+
+def libcosim_available() -> bool:
+    """Whether the Open Simulation Platform's Python package (libcosimpy, in the ``test`` extra) is installed."""
+    import importlib.util
+
+    return importlib.util.find_spec("libcosimpy") is not None
 
 
 def _status(check) -> int:

@@ -118,9 +118,11 @@ class Comparison:
                        f"({self.alignment_s * 1e3:+.1f} ms of ±{MAX_ALIGNMENT_S * 1e3:.0f} ms): the simulated "
                        f"response is out of phase with the measured one (the impact time, the speed or the model "
                        f"is wrong)")
-        worst = max((w.error_to_noise for w in self.windows.values()), default=0.0)
+        # the window where the misfit is furthest above the noise, and that window's ratio
+        name = max(self.windows, key=lambda n: self.windows[n].error_to_noise, default=None)
+        worst = self.windows[name].error_to_noise if name is not None else 0.0
         if self.extra.get("channels", 1) == 4 and worst > UNEXPLAINED_ERROR_TO_NOISE:
-            out.append(f"the misfit is {worst:.0f} x the noise in the {self.worst_window} window: on a "
+            out.append(f"the misfit is {worst:.0f} x the noise in the {name} window: on a "
                        f"whole-tractor recording one corner under its own mass cannot follow a body that couples "
                        f"the four tires; run 'cleatfmu diagnose' on the recording and simulate the four FMUs "
                        f"under its body (--body DIAG.json)")

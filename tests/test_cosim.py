@@ -2,6 +2,7 @@
 
 import json
 import math
+import re
 
 import control
 import numpy as np
@@ -155,6 +156,9 @@ def test_one_corner_on_the_whole_tractor_test_day_says_it_cannot_explain_it(tire
     assert max(w.error_to_noise for w in cmp.windows.values()) > 10
     body = [w for w in cmp.warnings if "whole-tractor recording" in w]
     assert body and "--body DIAG.json" in body[0], cmp.warnings
+    # the ratio quoted is the named window's own (it once quoted another window's)
+    m = re.search(r"the misfit is (\d+) x the noise in the (\w+) window", body[0])
+    assert m and int(m.group(1)) == round(cmp.windows[m.group(2)].error_to_noise), (body[0], cmp.windows)
 
 
 @pytest.mark.parametrize("method", ["paper", "waveform"])

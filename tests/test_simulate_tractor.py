@@ -144,6 +144,21 @@ def test_ssp_of_the_diagnosed_tractor_runs_in_fmpy_and_libcosim_like_the_master(
     assert result["check"]["exchange effect (parallel vs sequential master)"] > 1e-4
 
 
+def test_ssp_check_without_libcosimpy_checks_in_fmpy_and_says_so(cli, diagnosed, tmp_path, monkeypatch):
+    """After the main install (libcosimpy is only in the test extra) --check ran into a traceback; now it
+    checks in fmpy, says libcosim was not run and why, and exits 0 when fmpy agrees."""
+    from identification import ssp_cmd
+
+    monkeypatch.setattr(ssp_cmd, "libcosim_available", lambda: False)
+    csv_path, body, fmus, doc = diagnosed
+    res = cli("ssp", fmus, csv_path, "--body", body, "-o", tmp_path / "t.ssp", "--check", "--json")
+    assert res.code == 0, res.err
+    assert res.err.strip() == ("cleatfmu: warning: --check: libcosimpy is not installed (pip install libcosimpy): "
+                               "the archive is checked in fmpy only")
+    hosts = [h for h in json.loads(res.out)["check"] if not h.startswith("exchange")]
+    assert hosts == ["fmpy (sequential exchange)", "fmpy (parallel exchange)"]
+
+
 def test_ssp_refuses_a_body_document_that_is_not_json(cli, diagnosed, tmp_path):
     csv_path, body, fmus, doc = diagnosed
     bad = tmp_path / "bad.json"
