@@ -9,7 +9,11 @@ import tempfile
 from pathlib import Path
 from typing import Mapping
 
-__all__ = ["atomic_write_texts", "atomic_write_bytes", "publish_files", "json_text", "finite_or_none"]
+__all__ = ["atomic_write_texts", "atomic_write_bytes", "publish_files", "json_text", "finite_or_none",
+           "read_input_bytes", "read_input_text", "read_json_file", "INPUT_LIMIT_BYTES"]
+
+#: Largest input document (JSON, CSV table, property file) read whole, bytes.
+INPUT_LIMIT_BYTES = 256 << 20
 
 
 def finite_or_none(doc):
@@ -70,3 +74,56 @@ def publish_files(sources: Mapping[Path, Path]) -> list[Path]:
     """Copy finished files (source -> target mapping given as target: source) all-or-nothing."""
     atomic_write_bytes({Path(dst): Path(src).read_bytes() for dst, src in sources.items()})
     return [Path(dst) for dst in sources]
+
+
+def read_input_bytes(path, *, limit: int = INPUT_LIMIT_BYTES) -> bytes:
+    """The bytes of an input file: a regular file (a FIFO, a device or a directory, also behind a symlink, is
+    refused before it is opened, so nothing hangs or fills memory) of at most `limit` bytes.
+
+    Raises :class:`~identification.errors.InputError` naming the file, in one line.
+    """
+    from .errors import InputError
+
+    path = Path(path)
+    try:
+        if not path.exists():
+            raise InputError(path, "no such file")
+        if path.is_dir():
+            raise InputError(path, "is a directory, not a file")
+        if not path.is_file():
+            raise InputError(path, "is not a regular file (a pipe, a device or a socket)")
+        if path.stat().st_size > limit:
+            raise InputError(path, f"is larger than {limit >> 20} MiB")
+        with path.open("rb") as fh:
+            data = fh.read(limit + 1)
+    except OSError as exc:
+        raise InputError(path, f"cannot read: {exc.strerror or exc}") from None
+    if len(data) > limit:
+        raise InputError(path, f"is larger than {limit >> 20} MiB")
+    return data
+
+
+def read_input_text(path, *, limit: int = INPUT_LIMIT_BYTES, encoding: str = "utf-8") -> str:
+    """:func:`read_input_bytes` decoded (UTF-8 by default); InputError naming the file if it is not."""
+    from .errors import InputError
+
+    try:
+        return read_input_bytes(path, limit=limit).decode(encoding)
+    except UnicodeDecodeError:
+        raise InputError(path, "not a UTF-8 text file") from None
+
+
+def read_json_file(path, *, limit: int = INPUT_LIMIT_BYTES):
+    """The JSON document of an input file; InputError naming the file (malformed, nested too deeply to read,
+    a number beyond Python's integer-string limit) in one line."""
+    from .errors import InputError
+
+    text = read_input_text(path, limit=limit)
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(path, f"malformed JSON: {exc.msg} (line {exc.lineno}, column {exc.colno})") from None
+    except RecursionError:
+        raise InputError(path, "malformed JSON: nested too deeply to read") from None
+    except ValueError as exc:  # e.g. an integer beyond the int/str conversion limit (4300 digits)
+        raise InputError(path, f"malformed JSON: {exc}") from None

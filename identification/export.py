@@ -24,10 +24,10 @@ resources holds the complete ``identify`` entry of the tire.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path, PureWindowsPath
 
+from ._files import read_json_file
 from .cliutil import OutputFolders, check_folder, make_folders
 from .errors import InputError
 from .plausibility import check_value
@@ -100,16 +100,7 @@ def read_identified(path, tire: str | None = None, *, accept_out_of_range: bool 
         plausible ranges (one line, naming the file).
     """
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(path, "no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(path, f"cannot read: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(path, f"malformed JSON: {exc.msg} (line {exc.lineno}, column {exc.colno})") from None
-    except ValueError as exc:  # e.g. an integer beyond the int/str conversion limit (4300 digits)
-        raise InputError(path, f"malformed JSON: {exc}") from None
+    doc = read_json_file(path)
     if not isinstance(doc, dict) or not isinstance(doc.get("tires"), dict) or not doc["tires"]:
         raise InputError(path, 'not the output of "cleatfmu identify --json" (no "tires" object)')
     tires = doc["tires"]

@@ -51,7 +51,7 @@ from typing import Any
 
 import numpy as np
 
-from ._files import atomic_write_texts, json_text
+from ._files import atomic_write_texts, json_text, read_json_file
 from .acquisition import Acquisition, acquisition_from_sidecar
 from .errors import InputError
 from .plausibility import OVERRIDE_KEY, check_value, out_of_range
@@ -281,14 +281,7 @@ def _positive(path: Path, key: str, value: Any) -> float:
 
 
 def _read_sidecar(path: Path) -> dict[str, Any]:
-    try:
-        meta = json.loads(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise InputError(path, "not a UTF-8 text file") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(path, f"malformed JSON: {exc.msg} (line {exc.lineno}, column {exc.colno})") from None
-    except ValueError as exc:  # e.g. an integer beyond the int/str conversion limit (4300 digits)
-        raise InputError(path, f"malformed JSON: {exc}") from None
+    meta = read_json_file(path, limit=16 << 20)
     if not isinstance(meta, dict):
         raise InputError(path, "the sidecar must be a JSON object")
     fmt = meta.get("format")

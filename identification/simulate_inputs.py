@@ -9,7 +9,6 @@ effects and each tire's cleat arrival, for
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -78,16 +77,9 @@ def _number(value, keys: str, source) -> float:
 
 def read_body_document(source) -> dict:
     """Read a ``diagnose --json`` document (path) as a dict; InputError naming the file when unreadable."""
-    try:
-        text = Path(source).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(source, "no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(source, f"cannot read: {getattr(exc, 'strerror', None) or exc}") from None
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(source, f"not JSON ({exc.msg} at line {exc.lineno})") from None
+    from ._files import read_json_file
+
+    doc = read_json_file(source)
     if not isinstance(doc, dict):
         raise InputError(source, "not a 'cleatfmu diagnose --json' whole-tractor document (not a JSON object)")
     return doc

@@ -174,17 +174,10 @@ def read_compression(path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         A missing or unreadable file, missing or ambiguous columns, a short row, a
         non-numeric or non-finite cell.
     """
+    from ._files import read_input_text
+
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError(path, "no such file") from None
-    except IsADirectoryError:
-        raise InputError(path, "is a directory, not a CSV file") from None
-    except UnicodeDecodeError:
-        raise InputError(path, "not a UTF-8 text file") from None
-    except OSError as exc:
-        raise InputError(path, f"cannot read: {exc.strerror or exc}") from None
+    text = read_input_text(path, encoding="utf-8-sig")
     numbered = [(i + 1, ln) for i, ln in enumerate(text.splitlines())
                 if ln.strip() and not ln.lstrip().startswith("#")]
     if not numbered:

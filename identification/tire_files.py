@@ -225,11 +225,6 @@ def export_tire_file(params_path, output_path, *, fmt: str, tire: str | None = N
 
 def read_base(path: Path, limit: int = 16 << 20) -> bytes:
     """The bytes of a ``--base`` file: a regular file of at most `limit` bytes."""
-    try:
-        if not path.is_file():
-            raise InputError(path, "is not a regular file" if path.exists() else "does not exist")
-        if path.stat().st_size > limit:
-            raise InputError(path, f"is larger than {limit >> 20} MiB: not a tyre property file")
-        return path.read_bytes()
-    except OSError as exc:
-        raise InputError(path, f"cannot read: {exc.strerror or exc}") from None
+    from ._files import read_input_bytes
+
+    return read_input_bytes(path, limit=limit)

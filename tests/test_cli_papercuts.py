@@ -370,3 +370,46 @@ def test_every_json_document_is_written_through_the_strict_writer():
                     and getattr(node.func.value, "id", "") == "json" and any(k.arg == "indent" for k in node.keywords):
                 offenders.append(f"{path.name}:{node.lineno}")
     assert offenders == []
+
+
+@pytest.mark.parametrize("command,kind", [(c, k) for c in ("export", "static", "simulate-body", "sidecar")
+                                          for k in ("deep", "fifo", "device") if (c, k) != ("static", "deep")])
+def test_json_nested_too_deep_a_fifo_or_a_device_is_refused_in_one_line(cli, tmp_path, good_recording, command,
+                                                                         kind):
+    """JSON nested 20,000 deep was a RecursionError traceback; a FIFO hung and /dev/zero behind a symlink
+    filled memory, in export, static, simulate --body and a recording's sidecar."""
+    import os
+
+    bad = tmp_path / ("bad.json" if command != "static" else "bad.csv")
+    if kind == "deep":                                   # (a CSV has no nesting: not for static)
+        bad.write_text("[" * 20000 + "]" * 20000)
+    elif kind == "fifo":
+        os.mkfifo(bad)
+    else:
+        bad.symlink_to("/dev/zero")
+    if command == "export":
+        res = cli("export", bad, "-o", tmp_path / "x.fmu")
+    elif command == "static":
+        res = cli("static", bad)
+    elif command == "simulate-body":                      # the reader of simulate --body, ssp --body
+        from identification.errors import InputError
+        from identification.simulate_inputs import read_body_document
+        with pytest.raises(InputError) as info:
+            read_body_document(bad)
+        assert str(bad) in str(info.value) and ("nested too deeply" in str(info.value)
+                                                 or "not a regular file" in str(info.value))
+        return
+    else:
+        sidecar = good_recording.with_suffix(".json")
+        sidecar.unlink()
+        if kind == "deep":
+            sidecar.write_text(bad.read_text())
+        elif kind == "fifo":
+            os.mkfifo(sidecar)
+        else:
+            sidecar.symlink_to("/dev/zero")
+        res = cli("identify", good_recording)
+    assert res.code == 2, (res.code, res.err)
+    assert len(res.err.strip().splitlines()) == 1 and "Traceback" not in res.err
+    assert any(word in res.err for word in ("nested too deeply", "not a regular file", "sidecar run.json not found")), \
+        res.err

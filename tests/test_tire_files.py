@@ -163,7 +163,7 @@ def test_the_chrono_tire_json_changes_in_its_two_vertical_values_only(cli, param
      "[VERTICAL] has no VERTICAL_STIFFNESS or VERTICAL_DAMPING"),
     (("--format", "tir", "--base", "{base}"),
      "[VERTICAL]\nVERTICAL_STIFFNESS = 1\nVERTICAL_DAMPING = 2\nVERTICAL_DAMPING = 3\n", "given twice"),
-    (("--format", "tir", "--base", "{missing}"), None, "does not exist"),
+    (("--format", "tir", "--base", "{missing}"), None, "no such file"),
     (("--format", "chrono-json", "--base", "{base}"), '{"Vertical Stiffness": 1}', '0 numeric "Vertical Damping"'),
     (("--format", "chrono-json", "--base", "{base}"), "[" * 20000 + "]" * 20000, "is not JSON"),
     (("--format", "tir", "-o", "{tmp}/x.fmu"), None, "must end with .tir"),
