@@ -12,6 +12,7 @@ defaults (:class:`identification.cliutil.DefaultsHelpFormatter`).
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import io
 import os
@@ -236,6 +237,20 @@ def _run(argv) -> int:
     except KeyboardInterrupt:
         print("cleatfmu: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        raise
+    except OSError as exc:
+        # a file name the system refuses (too long), or stdout that cannot take the result (a full disk,
+        # /dev/full): one line, exit 2, as for any output that cannot be written; anything else is a bug
+        if exc.filename is not None and exc.errno in (errno.ENAMETOOLONG, errno.ELOOP):
+            print(f"cleatfmu: error: {exc.filename}: {exc.strerror}", file=sys.stderr)
+            return 2
+        if exc.filename is None and exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EFBIG,
+                                                 errno.EBADF):
+            _silence_stdout()
+            print(f"cleatfmu: error: stdout: cannot write: {exc.strerror}", file=sys.stderr)
+            return 2
+        raise
 
 
 def main(argv=None) -> int:
@@ -253,6 +268,10 @@ def main(argv=None) -> int:
         :data:`EXIT_CLOSED_PIPE` (141), silently, when stdout is a pipe closed before the output was
         written (``cleatfmu identify --example | head -1``).
     """
+    if sys.stdout is None:     # started with stdout closed (``>&-``): every result would be lost
+        print("cleatfmu: error: stdout: closed (the result would be lost); redirect it to a file or a pipe",
+              file=sys.stderr)
+        return 2
     try:
         return _run(argv)
     except BrokenPipeError:

@@ -413,3 +413,29 @@ def test_json_nested_too_deep_a_fifo_or_a_device_is_refused_in_one_line(cli, tmp
     assert len(res.err.strip().splitlines()) == 1 and "Traceback" not in res.err
     assert any(word in res.err for word in ("nested too deeply", "not a regular file", "sidecar run.json not found")), \
         res.err
+
+
+def test_an_output_name_too_long_is_one_line(cli, tmp_path):
+    """A 300-character output name was an ENAMETOOLONG traceback (``Path.is_dir``)."""
+    params = tmp_path / "p.json"
+    params.write_text(json.dumps({"tires": {"FL": {"k": 5e5, "c": 4e3}}}))
+    res = cli("export", params, "-o", tmp_path / ("a" * 300 + ".fmu"))
+    assert res.code == 2 and res.out == "" and "File name too long" in res.err
+    assert len(res.err.strip().splitlines()) == 1 and list(tmp_path.iterdir()) == [params]
+
+
+@pytest.mark.parametrize("redirect,needle", [("> /dev/full", "stdout: cannot write: No space left on device"),
+                                             (">&-", "stdout: closed (the result would be lost)")])
+def test_stdout_that_cannot_take_the_result_is_an_error_not_a_traceback_or_a_silent_success(redirect, needle):
+    """``identify --example > /dev/full`` was an ENOSPC traceback; with stdout closed it exited 0 and the
+    result was lost."""
+    import os
+
+    if redirect.endswith("/dev/full") and not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full here")
+    cmd = f"{shlex.quote(sys.executable)} -m identification.cli identify --example {redirect}"
+    done = subprocess.run(["bash", "-c", cmd], capture_output=True, text=True, timeout=120,
+                          cwd=Path(__file__).resolve().parents[1])
+    assert done.returncode == 2, (done.returncode, done.stderr)
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"cleatfmu: error: {needle}"), done.stderr
