@@ -1,13 +1,12 @@
 """The corner and half-tractor bodies of the single-FMU masters, their grid, road inputs and trajectory.
 
 There is one stepping scheme, :func:`identification.model.stepping.run_body`
-(reference Python; :mod:`identification.model.kernels` is its compiled
-twin): :func:`run_corner` (a corner mass, one coordinate) and
-:func:`run_half_tractor` (heave and pitch) are that scheme with J = [1] and
+(reference Python; :mod:`identification.model.kernels` is its compiled twin,
+:func:`identification.master.step_body_fmus` its twin with the FMI calls
+inline): :func:`corner_body` (a corner mass, one coordinate) and
+:func:`half_tractor_body` (heave and pitch) are bodies for it, J = [1] and
 J = [[1, a], [1, −b]], from the static equilibrium each tire's force law
-gives.  Tire forces come from callbacks - an FMU's ``getReal`` in a
-co-simulation, the tire law itself in a fitting model - so both compute the
-same numbers.
+gives.
 
 Point-contact cleat edges are grid points (see :func:`cleat_grid`): there the
 road is the mean of its two sides and its rate ±H/h, and the force is also
@@ -30,8 +29,8 @@ import numpy as np
 
 from .recording import STANDARD_GRAVITY
 
-__all__ = ["cleat_grid", "TireInputs", "tire_inputs", "Trajectory", "run_corner", "run_half_tractor",
-           "corner_body", "half_tractor_body", "grid_inputs", "half_tractor_geometry", "lug_steady_state"]
+__all__ = ["cleat_grid", "TireInputs", "tire_inputs", "Trajectory", "corner_body", "half_tractor_body",
+           "grid_inputs", "half_tractor_geometry", "lug_steady_state"]
 
 #: force(hub_z m, hub_vz m/s, hub_x m, hub_vx m/s, road_z m, road_vz m/s) -> force N
 ForceFn = Callable[[float, float, float, float, float, float], float]
@@ -227,20 +226,6 @@ def grid_inputs(inputs: Sequence[TireInputs], start_s: float, step_s: float, n: 
                     for name in ("road_z", "road_vz", "hub_x", "hub_vx")), edges=edges)
 
 
-def run_corner(force: ForceFn, *, mass_kg: float, start_s: float, step_s: float, n: int, inputs: TireInputs,
-               unloaded_radius_m: float, stiffness_guess_n_m: float, before_step=None,
-               initial_offset=(0.0, 0.0)) -> Trajectory:
-    """A corner mass m under gravity on one tire (a force callback), from static equilibrium:
-    :func:`corner_body` stepped by :func:`identification.model.stepping.run_body` (the one scheme).
-    `before_step` ``(t_n, h)`` is called before each step; the grid is :func:`cleat_grid`'s."""
-    from .model.stepping import run_body
-
-    body = corner_body(force, mass_kg=mass_kg, inputs=inputs, unloaded_radius_m=unloaded_radius_m,
-                       stiffness_guess_n_m=stiffness_guess_n_m, initial_offset=initial_offset)
-    return run_body([force], inputs=grid_inputs([inputs], start_s, step_s, n), start_s=start_s, step_s=step_s,
-                    before_step=before_step, **body)
-
-
 def half_tractor_geometry(load_front_n: float, load_rear_n: float, wheelbase_m: float, dynamic_index: float):
     """Mass (kg), pitch inertia (kg m²) and distances CG-front axle a, CG-rear axle b (m).
 
@@ -251,21 +236,6 @@ def half_tractor_geometry(load_front_n: float, load_rear_n: float, wheelbase_m: 
     a = wheelbase_m * load_rear_n / (load_front_n + load_rear_n)
     b = wheelbase_m - a
     return mass, dynamic_index * mass * a * b, a, b
-
-
-def run_half_tractor(forces: Sequence[ForceFn], *, loads_n: Sequence[float], wheelbase_m: float,
-                     dynamic_index: float, start_s: float, step_s: float, n: int, inputs: Sequence[TireInputs],
-                     unloaded_radii_m: Sequence[float], stiffness_guesses_n_m: Sequence[float],
-                     before_step=None, initial_offset=((0.0, 0.0), (0.0, 0.0))) -> Trajectory:
-    """A half-tractor on a front and a rear tire (force callbacks), from static equilibrium:
-    :func:`half_tractor_body` stepped by :func:`identification.model.stepping.run_body`."""
-    from .model.stepping import run_body
-
-    body = half_tractor_body(forces, loads_n=loads_n, wheelbase_m=wheelbase_m, dynamic_index=dynamic_index,
-                             inputs=inputs, unloaded_radii_m=unloaded_radii_m,
-                             stiffness_guesses_n_m=stiffness_guesses_n_m, initial_offset=initial_offset)
-    return run_body(list(forces), inputs=grid_inputs(inputs, start_s, step_s, n), start_s=start_s,
-                    step_s=step_s, before_step=before_step, **body)
 
 
 def lug_steady_state(*, masses_kg, stiffness_n_m, damping_n_s_m, lug_amplitude_m, lug_pitch_m, lug_phase_rad,
