@@ -22,8 +22,8 @@ from pathlib import Path
 CHILD = r"""
 import json, os, resource, sys, time
 from pathlib import Path
-import identification.batch as batch
-from identification.report_html import write_report
+import identification.report.batch as batch
+from identification.report.html import write_report
 
 FIG = 40_000
 
@@ -44,7 +44,7 @@ def fake_job(args):
 batch._job = fake_job
 paths, out = json.loads(sys.argv[1]), sys.argv[2]
 if sys.argv[3] == "in-memory":                # the figures kept in the parent and embedded, as before streaming
-    import identification.report_html as report_html
+    import identification.report.html as report_html
     batch._stream_figures = lambda rep, folder: None
     report_html.EMBED_MAX_RECORDINGS = 10 ** 9
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss

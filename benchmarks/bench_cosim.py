@@ -4,7 +4,7 @@ Side by side in one process, the same tire FMU and the same number of steps:
 
 * bare loop: instantiate, initialize, then per step ``setReal`` (4 inputs), ``doStep``,
   ``getReal`` (force), then terminate and free;
-* co-simulation: :func:`identification.cosim.run_quarter_tractor` over a 5 s recording
+* co-simulation: :func:`identification.fmu.cosim.run_quarter_tractor` over a 5 s recording
   span at the default step (equilibrium search, cleat, master integration included).
 
 Prints the median of 5 alternating rounds, for the stepping loops alone and for the whole
@@ -21,8 +21,8 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 from build_scripts import build_fmu
-from identification.cosim import run_quarter_tractor
-from identification.validation import DEFAULT_MAX_STEP_S
+from identification.fmu.cosim import run_quarter_tractor
+from identification.fmu.validation import DEFAULT_MAX_STEP_S
 
 
 def bare_loop(fmu, n_steps, h):

@@ -10,9 +10,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from identification.batch import run_batch
-from identification.examples import EXAMPLES, example_path
-from identification.report_html import write_report
+from identification.report.batch import run_batch
+from identification.recording.examples import EXAMPLES, example_path
+from identification.report.html import write_report
 
 
 def main():

@@ -12,7 +12,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from identification.identify import identify
+from identification.identify.paper import identify
 from identification.recording import read_recording
 from identification.rig import run_rig, write_run
 

@@ -154,7 +154,7 @@ def _best_s(fn, number=50, repeat=5):
 
 
 def kernels() -> None:
-    from identification.diagnose.tractor import TractorFitModel, TractorProblem
+    from identification.model.fitting import TractorFitModel, TractorProblem
     from identification.model.kernels import run_model
     from identification.model.stepping import run_model_python
     from identification.rig import run_rig

@@ -2,7 +2,7 @@
 
 A rig recording of a tractor (enveloping tires, 10 km/h) is diagnosed once;
 the fitted tire laws are built as four extended tire FMUs with each backend
-(the same start values), and :func:`identification.tractor_cosim.simulate_tractor`
+(the same start values), and :func:`identification.fmu.tractor_cosim.simulate_tractor`
 runs each set under the diagnosed body, interleaved over ``--rounds``.  Prints
 
 * the wall time per run (median, range) of each backend and the ratio
@@ -40,12 +40,12 @@ from pathlib import Path
 import numpy as np
 
 from build_scripts import build_fmu
-from identification import tractor_cosim
-from identification.cosim import TireFmu, step_fn
+from identification.fmu import tractor_cosim
+from identification.fmu.cosim import TireFmu, step_fn
 from identification.diagnose.run import run_tractor_diagnosis
 from identification.recording import read_recording
 from identification.rig import run_rig, write_run
-from identification.tractor_cosim import simulate_tractor
+from identification.fmu.tractor_cosim import simulate_tractor
 
 BACKENDS = ("native", "pythonfmu")
 #: Wall time (s) of each call of the master's stepping loop (``step_body_fmus``) inside ``simulate_tractor``.
@@ -124,7 +124,7 @@ def profile_split(paths, rec, doc) -> dict:
     stepping = cumulative("step_body_fmus", "tractor_cosim")
     wrappers = sum(cumulative(n, "fmpy") for n in ("setReal", "getReal", "doStep"))
     # TireFmu: read the model description, extract, instantiate; close: free, remove the folder
-    opening = cumulative("__init__", "identification/cosim.py") + cumulative("close", "identification/cosim.py")
+    opening = cumulative("__init__", "identification/fmu/cosim.py") + cumulative("close", "identification/fmu/cosim.py")
     return {"total": total, "stepping": stepping, "open": opening, "fmpy": wrappers,
             "rest": total - stepping - opening - wrappers,
             "calls": {n: sum(v[1] for k, v in stats.items() if k[2] == n and "fmpy" in k[0])

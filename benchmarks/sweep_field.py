@@ -66,9 +66,9 @@ def one(job: tuple) -> dict:
     """Run one draw; a JSON-ready summary."""
     from identification.diagnose.run import run_tractor_diagnosis
     from identification.errors import InputError
-    from identification.graceful import Refusal, identify_channels
+    from identification.identify.graceful import Refusal, identify_channels
     from identification.rig.generate import run_rig
-    from identification.window import focus
+    from identification.recording.window import focus
 
     artifact, effect, seed = job
     ov = draw(artifact, np.random.default_rng([seed, ARTIFACTS.index(artifact), EFFECTS.index(effect)]))

@@ -297,7 +297,7 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
 
 def _build_native(k, dest: Path, starts, given, provenance, description, fmi_version, platforms,
                   resources=None) -> Path:
-    from identification.tire_law import extended_parameter_problem, parameter_problem
+    from identification.model.tire_law import extended_parameter_problem, parameter_problem
 
     from .native_fmu import equilibrium_starts, native_fmu_bytes
 

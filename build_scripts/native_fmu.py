@@ -40,7 +40,7 @@ def equilibrium_starts(kind: FmuKind, starts: dict, given: dict, static_load_n: 
     touches the built-in cleat is moved 1 m before it, so that the default
     experiment does not park the tire on the cleat.
     """
-    from identification.tire_law import footprint_cleat, lug_road
+    from identification.model.tire_law import footprint_cleat, lug_road
 
     out = dict(starts)
     load = static_load_n

@@ -226,12 +226,12 @@ def _tractor_body_closed_form(inputs: dict, starts: dict) -> dict:
 
     J and M are those of :meth:`identification.model.tractor.Body.matrices`
     (any body), the initial coordinates the least-squares fit of the initial
-    hub values, the seat row that of :func:`identification.ssp.body_seat_row`; the stepping scheme is exact
+    hub values, the seat row that of :func:`identification.fmu.ssp.body_seat_row`; the stepping scheme is exact
     for a constant acceleration, so the FMU must match to round-off.  Hub
     velocities are the rates at the end of each step (q'0 + a τ).
     """
     from identification.model.tractor import Body
-    from identification.ssp import body_seat_row
+    from identification.fmu.ssp import body_seat_row
 
     tires = ("FL", "FR", "RL", "RR")
     forces = np.array([inputs[f"force_{t}"] for t in tires])

@@ -6,11 +6,15 @@ import json
 import math
 import os
 import tempfile
+import threading
 from pathlib import Path
 from typing import Mapping
 
+from .errors import InputError
+
 __all__ = ["atomic_write_texts", "atomic_write_bytes", "publish_files", "json_text", "finite_or_none",
-           "read_input_bytes", "read_input_text", "read_json_file", "INPUT_LIMIT_BYTES"]
+           "read_input_bytes", "read_input_text", "read_json_file", "INPUT_LIMIT_BYTES",
+           "OutputFolders", "check_folder", "make_folders", "missing_folders"]
 
 #: Largest input document (JSON, CSV table, property file) read whole, bytes.
 INPUT_LIMIT_BYTES = 256 << 20
@@ -127,3 +131,100 @@ def read_json_file(path, *, limit: int = INPUT_LIMIT_BYTES):
         raise InputError(path, "malformed JSON: nested too deeply to read") from None
     except ValueError as exc:  # e.g. an integer beyond the int/str conversion limit (4300 digits)
         raise InputError(path, f"malformed JSON: {exc}") from None
+
+
+# ----------------------------------------------------------------------------- output files and folders
+
+_local = threading.local()
+
+
+def _blocks() -> list:
+    if not hasattr(_local, "blocks"):
+        _local.blocks = []
+    return _local.blocks
+
+
+class OutputFolders:
+    """A block whose newly created output folders are removed again if it fails.
+
+    Folders made by :func:`make_folders` (or :func:`check_output`) inside the
+    block are recorded.  When the block raises, or :meth:`remove` is called,
+    they are removed, deepest first, where empty.  When it succeeds inside an
+    enclosing block, that block takes them over.
+    """
+
+    def __init__(self):
+        self.created: list[Path] = []
+
+    def __enter__(self) -> "OutputFolders":
+        _blocks().append(self)
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        blocks = _blocks()
+        blocks.remove(self)
+        if exc_type is not None:
+            self.remove()
+        elif blocks:
+            blocks[-1].created.extend(self.created)
+            self.created = []
+
+    def remove(self) -> None:
+        """Remove the recorded folders that are empty (the deepest first); forget all of them."""
+        for folder in reversed(self.created):
+            try:
+                folder.rmdir()
+            except OSError:
+                pass
+        self.created = []
+
+
+def missing_folders(folder) -> list[Path]:
+    """The folders that must be created to have `folder`, outermost first.
+
+    Raises
+    ------
+    InputError
+        A part of the path exists and is not a folder.
+    """
+    folder = Path(folder)
+    missing: list[Path] = []
+    for path in (folder, *folder.parents):
+        if path.is_dir():
+            break
+        if path.exists():
+            raise InputError(path, "is not a directory")
+        missing.append(path)
+    return missing[::-1]
+
+
+def check_folder(folder) -> None:
+    """Refuse an output folder that cannot be created (a part of its path is a file); nothing is created."""
+    missing_folders(folder)
+
+
+def make_folders(folder) -> list[Path]:
+    """Create `folder` and its missing parents; return those created, outermost first.
+
+    Inside an :class:`OutputFolders` block they are recorded, to be removed again if the block fails.
+
+    Raises
+    ------
+    InputError
+        A part of the path is a file, or a folder cannot be created.
+    """
+    created: list[Path] = []
+    for path in missing_folders(folder):
+        try:
+            path.mkdir()
+        except FileExistsError:
+            if not path.is_dir():
+                raise InputError(path, "is not a directory") from None
+            continue
+        except OSError as exc:
+            raise InputError(path, f"cannot create the directory: {exc.strerror or exc}") from None
+        created.append(path)
+        blocks = _blocks()
+        if blocks:
+            blocks[-1].created.append(path)
+    return created

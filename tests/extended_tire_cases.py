@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-import identification.tire_law as law
+import identification.model.tire_law as law
 
 KIND = "extended_tire"
 INPUTS = ["hub_z", "hub_vz", "road_z", "road_vz", "hub_x", "hub_vx"]

@@ -50,7 +50,7 @@ def assert_step_response(rows, *, k: float, c: float, r0: float, load: float, he
 
     import numpy as np
 
-    from identification import tire_law
+    from identification.model import tire_law
 
     g = 9.80665
     mass = load / g
@@ -129,8 +129,8 @@ def start_values(fmu) -> tuple[dict, dict]:
 
 
 def law_force(kind: str, s: dict) -> float:
-    """force_z of the Python law (:mod:`identification.tire_law`) of FMU `kind` for the values `s`."""
-    from identification import tire_law
+    """force_z of the Python law (:mod:`identification.model.tire_law`) of FMU `kind` for the values `s`."""
+    from identification.model import tire_law
 
     if kind == "point_contact":
         return tire_law.point_contact(s["hub_z"], s["hub_vz"], s["road_z"], s["road_vz"], s["stiffness"],

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from identification.acquisition import Acquisition, apply_chain, chain_modes, sensed_acceleration
-from identification.diagnose.tractor import TractorFitModel, TractorProblem
+from identification.model.acquisition import Acquisition, apply_chain, chain_modes, sensed_acceleration
+from identification.model.fitting import TractorFitModel, TractorProblem
 from identification.recording import read_recording, write_recording
 from identification.rig import run_rig
 

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from identification.cleat import CleatProfile, parse_profile
+from identification.recording.cleat import CleatProfile, parse_profile
 from identification.errors import InputError
 from identification.recording import read_recording
 from identification.rig import run_rig
@@ -94,8 +94,8 @@ def test_a_correct_fmu_co_simulates_at_the_noise_floor(tmp_path, height_m, bevel
     riding a rectangle of the same height and width instead misses a bevelled cleat by far more."""
     from dataclasses import replace
 
-    from identification.export import export_fmu
-    from identification.validation import simulate_recording
+    from identification.fmu.export import export_fmu
+    from identification.fmu.validation import simulate_recording
 
     run = run_rig((), {"cleat.height_m": height_m, "cleat.bevel_m": bevel_m, "speed_kmh": speed_kmh,
                        "sensor.noise_m_s2": 0.05}, seed=3)

@@ -18,8 +18,8 @@ from types import SimpleNamespace
 
 import pytest
 
-from identification import cli
-from identification.cliutil import OutputFolders, check_output, choose_tire, make_folders
+from identification.cli import command_line as cli
+from identification.cli.util import OutputFolders, check_output, choose_tire, make_folders
 from identification.errors import InputError
 
 TIRES = ("FL", "FR", "RL", "RR")
@@ -169,7 +169,8 @@ def test_ride_plot_folder_removed_when_the_run_fails(cli, tmp_path):
 @pytest.fixture
 def fake_simulation(monkeypatch):
     """``simulate`` with a stand-in co-simulation and plot (the command line around them is real)."""
-    from identification import plots, validation
+    from identification.report import plots
+    from identification.fmu import validation
 
     def simulate_recording(fmu, rec, tire, **kwargs):
         if str(fmu).endswith("bad.fmu"):
@@ -193,8 +194,8 @@ def test_simulate_plot_folder_created(cli, tmp_path, fake_simulation):
 @pytest.fixture
 def fake_diagnosis(monkeypatch):
     """``diagnose`` with a stand-in diagnosis writing four FMU files (the command line around it is real)."""
-    from identification import plots
-    from identification.diagnose import command
+    from identification.report import plots
+    from identification.cli import diagnose as command
 
     calls = []
 
@@ -328,7 +329,7 @@ def test_diagnose_timings_only_with_verbose(cli, fake_diagnosis):
 
 
 def test_tractor_text_says_not_determined_instead_of_printing_huge_bounds():
-    from identification.diagnose.command import _interval
+    from identification.cli.diagnose import _interval
 
     assert _interval(480e3, (470e3, 490e3), 1e3, ".1f") == "(470.0-490.0)"
     assert _interval(480e3, (1e-3, 1e300), 1e3, ".1f") == "(not determined by the data)"
@@ -393,7 +394,7 @@ def test_json_nested_too_deep_a_fifo_or_a_device_is_refused_in_one_line(cli, tmp
         res = cli("static", bad)
     elif command == "simulate-body":                      # the reader of simulate --body, ssp --body
         from identification.errors import InputError
-        from identification.simulate_inputs import read_body_document
+        from identification.fmu.simulate_inputs import read_body_document
         with pytest.raises(InputError) as info:
             read_body_document(bad)
         assert str(bad) in str(info.value) and ("nested too deeply" in str(info.value)

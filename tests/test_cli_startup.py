@@ -6,7 +6,7 @@ import json
 import subprocess
 import sys
 
-from identification import cli
+from identification.cli import command_line as cli
 from identification.recording import STANDARD_GRAVITY
 
 #: Packages that take most of a second to import and that ``cleatfmu export`` does not need.
@@ -78,11 +78,11 @@ def test_a_first_run_says_it_compiles_and_a_second_does_not(tmp_path):
     import sys
 
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
-    code = ("import sys; from identification.cliutil import announce_compilation; announce_compilation()\n"
+    code = ("import sys; from identification.cli.util import announce_compilation; announce_compilation()\n"
             "from identification.model.kernels import compiled_on_disk, run_model\n"
-            "from identification.diagnose.tractor import TractorFitModel, TractorProblem\n"
+            "from identification.model.fitting import TractorFitModel, TractorProblem\n"
             "from identification.recording import read_recording\n"
-            "from identification.examples import example_path\n"
+            "from identification.recording.examples import example_path\n"
             "pb = TractorProblem.from_recording(read_recording(example_path('7kmh')))\n"
             "m = TractorFitModel((), pb)\n"
             "print(compiled_on_disk())\n")

@@ -51,7 +51,7 @@ def test_an_unusable_scheduler_is_one_line_and_exit_2(cli, day, tmp_path, monkey
 
 
 def test_tires_keep_the_file_order_whatever_order_the_results_arrive_in(day, tmp_path, monkeypatch):
-    import identification.batch as batch
+    import identification.report.batch as batch
     from identification import executors
 
     class Reversed(executors.LocalExecutor):

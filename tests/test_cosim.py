@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from build_scripts import build_fmu
-from identification.cosim import run_quarter_tractor
-from identification.preprocess import lowpass
+from identification.fmu.cosim import run_quarter_tractor
+from identification.recording.preprocess import lowpass
 from identification.recording import STANDARD_GRAVITY, write_recording
 from identification.rig import run_rig
-from identification.validation import box_average, simulate_recording
-from identification.waveform import identify_waveform_recording
+from identification.fmu.validation import box_average, simulate_recording
+from identification.identify.waveform import identify_waveform_recording
 
 M, K, C = 11460 / STANDARD_GRAVITY, 550e3, 4200.0
 H, W = 0.04, 0.10
@@ -131,14 +131,14 @@ def test_closed_loop_on_rig_baseline(cli, tmp_path, baseline_runs, speed, tire):
 def test_an_alignment_at_its_search_limit_is_reported_as_a_warning(tire_fmu, baseline_runs):
     from dataclasses import replace
 
-    from identification.validation import MAX_ALIGNMENT_S
+    from identification.fmu.validation import MAX_ALIGNMENT_S
 
     cmp = simulate_recording(tire_fmu, baseline_runs[7.0].recording, "FL")
     assert not cmp.alignment_at_limit and cmp.warnings == []
     stuck = replace(cmp, alignment_s=MAX_ALIGNMENT_S)
     assert stuck.alignment_at_limit and "search limit" in stuck.warnings[0] and "+30.0 ms" in stuck.warnings[0]
     assert stuck.to_json()["alignment_at_limit"] is True
-    from identification.simulate_cmd import _text
+    from identification.cli.simulate import _text
 
     assert "warning: the alignment of simulated to measured acceleration reached its search limit" in \
         _text(stuck, baseline_runs[7.0].recording)
@@ -148,7 +148,7 @@ def test_an_alignment_at_its_search_limit_is_reported_as_a_warning(tire_fmu, bas
 def test_one_corner_on_the_whole_tractor_test_day_says_it_cannot_explain_it(tire_fmu):
     """The embedded test day is a whole tractor (a rigid body couples the tires): one corner under its own
     mass misses it by far more than the noise, and the comparison says so and what to run instead."""
-    from identification.examples import example_path
+    from identification.recording.examples import example_path
     from identification.recording import read_recording
 
     rec = read_recording(example_path("7kmh"))

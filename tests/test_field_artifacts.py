@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from identification.condition import condition
-from identification.identify import identify
+from identification.recording.condition import condition
+from identification.identify.paper import identify
 from identification.rig import EFFECTS, run_rig
 from identification.rig.generate import write_run
 
@@ -244,8 +244,8 @@ def test_a_single_engine_line_without_orders_is_removed_for_identify_and_modelle
     and gets every tire with both methods; the diagnosis keeps it, names periodic_disturbance alone, says an
     engine line looks the same, and gets every k and c."""
     from identification.diagnose.joint_select import diagnose_tractor
-    from identification.graceful import identify_channels
-    from identification.window import focus
+    from identification.identify.graceful import identify_channels
+    from identification.recording.window import focus
 
     run = _run(**{"engine.frequency_hz": 45.0, "engine.amplitude_m_s2": 2.0, "engine.orders": 1})
     assert "engine" not in condition(run.recording, announce=False).conditioning

@@ -125,7 +125,7 @@ def test_compliance_check_detects_missing_units_and_structure(fmu, tmp_path):
 
 
 def test_fmu_contains_the_law_and_shared_modules_verbatim_and_only_kind_prefixed_modules(fmu):
-    import identification.tire_law as law
+    import identification.model.tire_law as law
 
     entry, modules = packaged_modules(fmu)
     assert re.fullmatch(r"cleatfmu_point_contact_b[0-9a-f]{10}", entry)  # unique to the build

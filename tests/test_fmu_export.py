@@ -8,7 +8,8 @@ import zipfile
 
 import pytest
 
-from identification import cli, export
+from identification.cli import command_line as cli
+from identification.fmu import export
 
 FL = {"k": 412345.678901234, "c": 2345.6789, "T": 0.41, "delta": 0.9, "zeta": 0.142, "omega_n": 15.5,
       "r2": 0.98, "n_peaks": 5, "mass": 1716.2}

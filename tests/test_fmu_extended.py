@@ -11,7 +11,7 @@ from extended_tire_cases import (BOOL_PARAMS, INPUTS, KIND, OPTION_SETS, OUTPUTS
 from fmu_helpers import (assert_runs_match_the_law, initial_unknowns, kind_fixtures, model_description,
                          output_dependencies)
 
-import identification.tire_law as law
+import identification.model.tire_law as law
 from build_scripts import build_fmu, load_kind
 from build_scripts.compliance import compliance_problems
 from build_scripts.reference import closed_form_outputs, read_reference

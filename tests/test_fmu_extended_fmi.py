@@ -14,7 +14,7 @@ from fmu_helpers import (LEAK_LIMIT, assert_fmpy_matches_the_reference, assert_h
                          assert_libcosim_matches_fmpy, assert_state_round_trip, assert_value_rejected, kind_fixtures,
                          packaged_modules, reinitialise_and_step, rss_growth, run_steps)
 
-import identification.tire_law as law
+import identification.model.tire_law as law
 from build_scripts import build_fmu, load_kind
 from build_scripts.kinds import module_source
 from build_scripts.runners import open_fmpy_slave
@@ -54,7 +54,7 @@ def test_two_fmus_of_the_kind_keep_their_own_parameters(fmu, tmp_path, vr):
 
 
 def test_the_co_simulation_master_reads_and_sets_both_booleans(tmp_path):
-    from identification.cosim import TireFmu
+    from identification.fmu.cosim import TireFmu
 
     fmu = build_fmu(KIND, tmp_path / "RL.fmu", start_values={"parabolic_pressure": True, "footprint_length": 0.3})
     with TireFmu(fmu) as tire:

@@ -1,4 +1,4 @@
-"""The point-contact tire law (identification.tire_law) against exact arithmetic."""
+"""The point-contact tire law (identification.model.tire_law) against exact arithmetic."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from identification import tire_law
+from identification.model import tire_law
 
 
 def random_cases(n, seed):

@@ -19,7 +19,7 @@ from build_scripts.compliance import compliance_problems
 from build_scripts.native import _fmpy_headers
 from build_scripts.reference import read_reference
 from build_scripts.runners import open_fmpy_slave, variable_refs
-from identification import tire_law
+from identification.model import tire_law
 
 KINDS = ("point_contact", "extended_tire")
 G = 9.80665
@@ -398,7 +398,7 @@ def test_linux_binary_needs_only_libc_and_libm_of_glibc_2_17(native_fmus):
 def test_closing_a_tire_fmu_that_was_never_initialized_frees_it_without_an_error(native_fmus):
     """FMI refuses fmi2Terminate before initialization (the native FMU says so): close() must not call it,
     or its error would hide the one that stopped the run and leave the other instances open."""
-    from identification.cosim import TireFmu
+    from identification.fmu.cosim import TireFmu
 
     tire = TireFmu(native_fmus["extended_tire"])
     tire.close()

@@ -12,7 +12,7 @@ from native_fixtures import (AWKWARD_DIR, assert_step_response, c_host3, extract
                              native_fmus3, run_host3, start_values)
 
 from build_scripts import build_fmu
-from identification import tire_law
+from identification.model import tire_law
 
 G = 9.80665
 

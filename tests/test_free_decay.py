@@ -12,7 +12,7 @@ from identification.diagnose.joint_fit import fit_tractor
 from identification.diagnose.joint_select import TractorDiagnosis
 from identification.diagnose.joint_start import starting_values
 from identification.diagnose.run import diagnosis_warnings
-from identification.diagnose.tractor import TractorFitModel, TractorProblem
+from identification.model.fitting import TractorFitModel, TractorProblem
 from identification.rig import run_rig
 
 

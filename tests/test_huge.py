@@ -22,7 +22,7 @@ import pytest
 
 from identification.recording import read_recording
 from identification.rig import run_rig, write_run
-from identification.window import LEAD_S, LONG_RECORD_S, MAX_DECAY_S
+from identification.recording.window import LEAD_S, LONG_RECORD_S, MAX_DECAY_S
 
 RATE_HZ = 500.0
 NOISE = 0.05
@@ -123,7 +123,7 @@ def _reference_rows(text: str) -> list[list[float]]:
 
 
 def test_the_chunked_reader_matches_a_plain_parse_and_names_lines_across_chunks(tmp_path, monkeypatch):
-    import identification.recording_csv as rc
+    import identification.recording.csv_reader as rc
     from identification.errors import InputError
 
     monkeypatch.setattr(rc, "CHUNK_LINES", 7)
@@ -161,7 +161,7 @@ class _Pipe(io.StringIO):
 
 
 def test_diagnose_progress_on_a_long_recording_is_plain_lines_on_a_pipe(monkeypatch):
-    from identification.diagnose import command
+    from identification.cli import diagnose as command
 
     err = _Pipe()
     monkeypatch.setattr(sys, "stderr", err)
@@ -184,10 +184,10 @@ def test_diagnose_progress_on_a_long_recording_is_plain_lines_on_a_pipe(monkeypa
 
 
 def test_decimation_keeps_the_analysis_band_and_says_so(capsys):
-    from identification.acquisition import Acquisition
-    from identification.preprocess import lowpass
+    from identification.model.acquisition import Acquisition
+    from identification.recording.preprocess import lowpass
     from identification.recording import Recording
-    from identification.window import decimate, window_json
+    from identification.recording.window import decimate, window_json
 
     from conftest import damped_sine
 

@@ -13,7 +13,7 @@ import pytest
 
 from identification.comfort import (comfort, crest_factor, daily_exposure, running_rms, vdv, vdv_exposure, weight,
                                     weighting_response)
-from identification.comfort import comfort_cmd
+from identification.cli import comfort as comfort_cmd
 from identification.errors import InputError
 
 # ISO 2631-1:1997 Table 3: the principal frequency weightings in one-third octaves, factors x 1000 (three
@@ -193,7 +193,7 @@ def test_api_rejects_bad_arguments_naming_them(call, source):
 def _cleatfmu(capsys, *args):
     """Run ``cleatfmu ARGS``: through the CLI once ``comfort`` is registered there, else through the same
     parser and error convention (InputError -> one line, exit status 2)."""
-    from identification import cli
+    from identification.cli import command_line as cli
 
     argv = [str(a) for a in args]
     if "comfort" in cli._COMMAND_MODULE_OF:

@@ -9,7 +9,7 @@ from scipy.optimize._numdiff import approx_derivative
 from identification.diagnose.joint_fit import fit_tractor
 from identification.diagnose.joint_jacobian import (GroupedJacobian, channel_dependence, column_groups,
                                                     forward_steps)
-from identification.diagnose.tractor import TractorFitModel, TractorProblem
+from identification.model.fitting import TractorFitModel, TractorProblem
 from identification.rig import run_rig
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from conftest import LOADS_N, analytic_recording, true_k
 
-from identification.identify import (damping_ratio, decay_rate_through_first_peak, identify, natural_frequency,
+from identification.identify.paper import (damping_ratio, decay_rate_through_first_peak, identify, natural_frequency,
                                      stiffness)
 from identification.recording import STANDARD_GRAVITY
 
@@ -80,7 +80,7 @@ def test_second_axle_window_excludes_the_rear_impact():
     rec = analytic_recording(modes=modes, tires=("FL",), second_axle_impulse=True)
     r = identify(rec)["FL"]
     t_rear = 0.5 + 2.77 / (7 / 3.6)
-    from identification.preprocess import preprocess
+    from identification.recording.preprocess import preprocess
     peaks = preprocess(rec)["FL"].peak_times_s
     assert peaks.max() < t_rear
     assert r.k == pytest.approx(true_k("FL", modes["FL"]), rel=1e-3)
@@ -89,7 +89,7 @@ def test_second_axle_window_excludes_the_rear_impact():
 
 def test_rear_analysis_starts_at_its_own_impact():
     rec = analytic_recording()
-    from identification.preprocess import preprocess
+    from identification.recording.preprocess import preprocess
     sig = preprocess(rec)
     t_rear = 0.5 + 2.77 / (7 / 3.6)
     for tire in ("RL", "RR"):

@@ -1,6 +1,6 @@
 """Physical plausibility at the input boundaries: sidecar, time column, export parameters, rig and command options.
 
-Each value out of its range (:mod:`identification.plausibility`) ends in one
+Each value out of its range (:mod:`identification.recording.plausibility`) ends in one
 line naming the file or option, the value and the range, exit 2 and nothing
 written; the explicit overrides (the sidecar's ``"out_of_range_ok"``,
 ``export --accept-out-of-range``) let a genuine value through.
@@ -15,8 +15,8 @@ import xml.etree.ElementTree as ET
 import pytest
 
 from conftest import analytic_recording, rewrite_sidecar
-from identification.examples import EXAMPLES, example_path
-from identification.plausibility import RANGES
+from identification.recording.examples import EXAMPLES, example_path
+from identification.recording.plausibility import RANGES
 from identification.recording import read_recording, write_recording
 from identification.rig.params import PARAMS, RANGES as RIG_RANGES
 

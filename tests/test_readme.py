@@ -138,7 +138,7 @@ def test_readme_blocks_run_in_order(tmp_path):
             assert _python_example(block["body"], tmp_path, env)["force"] == pytest.approx(k * 0.02, rel=1e-9)
         else:
             # the sidecar shown: a recording of the four tires with it, read back, keeps its values
-            from identification.examples import example_path
+            from identification.recording.examples import example_path
             sidecar = json.loads(block["body"])
             folder = tmp_path / "sidecar"
             folder.mkdir()

@@ -128,7 +128,7 @@ def test_demo_fmus_are_valid_and_listed(demo):
 
 def test_demo_recommends_one_joint_k_c_per_tire_within_the_truth(demo):
     """One joint diagnosis per recording; its k, c per tire judged against the test day's truth files."""
-    from identification.examples import truth_path
+    from identification.recording.examples import truth_path
     code, out = demo
     summary = json.loads((out / "summary.json").read_text())
     html = (out / "report.html").read_text()
@@ -256,7 +256,7 @@ def test_report_needs_recordings(cli, tmp_path):
 def test_a_failed_run_into_new_folders_leaves_none_behind(cli, tmp_path, monkeypatch, case):
     """report: nothing readable; demo: a path through a file, or interrupted once its folders exist.
     One line on stderr, exit 2 (130 interrupted), and no folder left behind."""
-    import identification.batch as batch
+    import identification.report.batch as batch
 
     (tmp_path / "bad.csv").write_text("x,FL\n0,1\n")
     (tmp_path / "file").write_text("")
@@ -283,7 +283,7 @@ def test_a_failed_run_into_new_folders_leaves_none_behind(cli, tmp_path, monkeyp
 def test_the_progress_bar_shows_from_the_first_second(tmp_path, monkeypatch):
     """On a terminal the bar is drawn at once and its elapsed time moves before the first result arrives."""
     import time
-    import identification.batch as batch
+    import identification.report.batch as batch
 
     class Terminal(io.StringIO):
         def __init__(self):
@@ -318,8 +318,8 @@ def test_the_progress_bar_shows_from_the_first_second(tmp_path, monkeypatch):
 def test_the_summary_shows_what_conditioning_and_diagnosis_warned_of():
     """A recording whose diagnosis warned (a sign settled by the joint fit, an engine line removed): each
     warning is on its summary row, escaped; a recording without warnings shows none."""
-    from identification.batch import BatchResult, DiagnosisReport, RecordingReport
-    from identification.report_html import _summary
+    from identification.report.batch import BatchResult, DiagnosisReport, RecordingReport
+    from identification.report.html import _summary
 
     warned = ["steady vibration at 45.00 Hz and 2 of its orders on every channel (engine) removed",
               "the signs of FL/FR tested in the joint fit: FL reads upside down (sign corrected) <by BIC>"]

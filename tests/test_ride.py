@@ -7,8 +7,9 @@ import control
 import numpy as np
 import pytest
 
-from identification import tire_law
-from identification.comfort.ride import RAMP_M, ride_model, seat_acceleration, seat_row
+from identification.model import tire_law
+from identification.comfort.ride import seat_acceleration
+from identification.model.ride import RAMP_M, ride_model, seat_row
 from identification.model.kernels import run_model
 from identification.model.tractor import Body
 

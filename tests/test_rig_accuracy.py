@@ -110,7 +110,7 @@ def test_lift_off_events_converge():
 def test_rig_shares_no_model_code_with_the_pipeline():
     """The rig may use the recording format, errors and file writing - nothing else of the package.
 
-    The format includes the sidecar's cleat profile (``identification.cleat``), whose geometry
+    The format includes the sidecar's cleat profile (``identification.recording.cleat``), whose geometry
     ``tests/test_cleat_profile.py`` checks against independent references (np.interp, quadrature,
     python-control)."""
     allowed = {"errors", "recording", "_files", "cleat"}

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from identification.examples import EXAMPLES, example_path, truth_path
+from identification.recording.examples import EXAMPLES, example_path, truth_path
 from identification.recording import read_recording
 from identification.rig.testday import TESTDAY, write_testday
 

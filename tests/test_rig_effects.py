@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from identification.preprocess import lowpass, preprocess
+from identification.recording.preprocess import lowpass, preprocess
 from identification.recording import STANDARD_GRAVITY
 from identification.rig import EFFECTS, run_rig
 

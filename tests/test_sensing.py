@@ -7,12 +7,12 @@ import itertools
 import numpy as np
 import pytest
 
-from identification.acquisition import Acquisition
-from identification.diagnose.tractor import BODY_EFFECTS, TIRE_EFFECTS, TractorFitModel, TractorProblem
+from identification.model.acquisition import Acquisition
+from identification.model.fitting import BODY_EFFECTS, TIRE_EFFECTS, TractorFitModel, TractorProblem
 from identification.errors import InputError
 from identification.model.sensing import sensed_lowpassed, sensed_lowpassed_reference
 from identification.rig import run_rig
-from identification.scheme import Trajectory
+from identification.model.scheme import Trajectory
 
 TOL = 1e-12
 CHAINS = {"rig": "rig", "none": None, "highpass_only": Acquisition(0, 0.0, 0.05),

@@ -147,7 +147,7 @@ def test_ssp_of_the_diagnosed_tractor_runs_in_fmpy_and_libcosim_like_the_master(
 def test_ssp_check_without_libcosimpy_checks_in_fmpy_and_says_so(cli, diagnosed, tmp_path, monkeypatch):
     """After the main install (libcosimpy is only in the test extra) --check ran into a traceback; now it
     checks in fmpy, says libcosim was not run and why, and exits 0 when fmpy agrees."""
-    from identification import ssp_cmd
+    from identification.cli import ssp as ssp_cmd
 
     monkeypatch.setattr(ssp_cmd, "libcosim_available", lambda: False)
     csv_path, body, fmus, doc = diagnosed

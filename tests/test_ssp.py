@@ -13,10 +13,10 @@ import pytest
 from identification.model import Cleat, TractorModel
 from identification.model.tractor import Body
 from identification.recording import TIRES
-from identification.ssp import write_tractor_ssp
-from identification.ssp_run import (master_reference, read_system, relative_deviation, run_ssp_fmpy,
+from identification.fmu.ssp import write_tractor_ssp
+from identification.fmu.ssp_run import (master_reference, read_system, relative_deviation, run_ssp_fmpy,
                                      run_ssp_libcosim, ssd_step)
-from identification.tire_law import EXTENDED_DEFAULTS
+from identification.model.tire_law import EXTENDED_DEFAULTS
 from native_fixtures import _compile_host, extract, guid
 
 SPEED = 7.0 / 3.6
@@ -124,7 +124,7 @@ def test_libcosim_runs_the_ssp_from_the_ssp_alone(system, tmp_path):
     record, path = system
     assert ssd_step(path) == STEP
     script = (f"import json, sys; sys.path.insert(0, {str(Path(__file__).resolve().parents[1])!r}); "
-              "from identification.ssp_run import run_ssp_libcosim; "
+              "from identification.fmu.ssp_run import run_ssp_libcosim; "
               f"out = run_ssp_libcosim({str(path)!r}, step_s=None, stop_s=0.5); "
               "print(json.dumps({k: [float(x) for x in v[1:]] for k, v in out.items()}))")
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
@@ -202,7 +202,7 @@ def test_the_ride_as_an_ssp_reproduces_the_seat_acceleration_of_ride(tmp_path):
     from identification.comfort.ride import ride
     from identification.comfort.ride_ssp import write_ride_ssps
     from identification.comfort.road import road_profile
-    from identification.ssp_run import check_ssp
+    from identification.fmu.ssp_run import check_ssp
 
     body = Body(TIRES, LOADS, WHEELBASE, pitch=True, roll=True, pitch_index=0.8, roll_index=0.5)
     road = road_profile("C", SPEED * 9.0 + 1.0, 0.01, 3)
@@ -222,7 +222,8 @@ def test_the_ride_as_an_ssp_reproduces_the_seat_acceleration_of_ride(tmp_path):
     seat = got["seat_az"][rows]
     assert np.std(run.seat_m_s2) > 0.1                     # the road shakes the seat
     assert np.max(np.abs(seat - run.seat_m_s2)) < 1e-9 * np.ptp(run.seat_m_s2)
-    from identification.comfort.ride import _point_contact, ride_model
+    from identification.comfort.ride import _point_contact
+    from identification.model.ride import ride_model
     laws = [_point_contact(sets["final"][0][t], sets["final"][1][t], w) for t, w in zip(TIRES, LOADS)]
     record = ride_model(body, laws, speed_m_s=SPEED, road_x_m=road.x_m, road_left_m=road.left_m,
                         road_right_m=road.right_m)

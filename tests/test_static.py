@@ -6,9 +6,10 @@ import json
 import numpy as np
 import pytest
 
-from identification import cli, static_cmd
+from identification.cli import command_line as cli
+from identification.cli import static as static_cmd
 from identification.errors import InputError
-from identification.static import read_compression, static_stiffness, static_stiffness_file
+from identification.identify.static import read_compression, static_stiffness, static_stiffness_file
 
 K_TABLE5 = 295.08e3        # N/m: Table 5, front tire at 6.67 kg/s
 NOISE_N = 40.0
@@ -40,8 +41,8 @@ def _args(*argv):
 def registered(monkeypatch):
     """``cleatfmu static`` in the CLI's command list (whether or not cli.py names it yet)."""
     if "static" not in cli._COMMAND_MODULE_OF:
-        monkeypatch.setattr(cli, "_COMMAND_MODULES", [*cli._COMMAND_MODULES, ".static_cmd"])
-        monkeypatch.setattr(cli, "_COMMAND_MODULE_OF", {**cli._COMMAND_MODULE_OF, "static": ".static_cmd"})
+        monkeypatch.setattr(cli, "_COMMAND_MODULES", [*cli._COMMAND_MODULES, ".static"])
+        monkeypatch.setattr(cli, "_COMMAND_MODULE_OF", {**cli._COMMAND_MODULE_OF, "static": ".static"})
 
 
 def test_known_slope_recovered_within_its_interval(tmp_path):

@@ -5,8 +5,9 @@ import pytest
 from fmpy.fmi1 import FMICallException
 
 from build_scripts import build_fmu
-from identification import tire_law, tractor_cosim
-from identification.cosim import TireFmu, step_fn
+from identification.model import tire_law
+from identification.fmu import tractor_cosim
+from identification.fmu.cosim import TireFmu, step_fn
 from identification.model import Body, Cleat, TractorModel
 from identification.model.stepping import run_body, run_model_python
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from identification.diagnose.joint_select import diagnose_tractor
-from identification.diagnose.tractor import TIRE_EFFECTS
+from identification.model.fitting import TIRE_EFFECTS
 from identification.recording import read_recording
 from identification.rig import run_rig, write_run
 

@@ -4,12 +4,12 @@ import control
 import numpy as np
 import pytest
 
-from identification import tire_law
-from identification.cleat import CleatProfile
+from identification.model import tire_law
+from identification.recording.cleat import CleatProfile
 from identification.model import Body, Cleat, TractorModel, cleat_inputs
 from identification.model.kernels import run_model
 from identification.model.stepping import run_model_python
-from identification.preprocess import lowpass
+from identification.recording.preprocess import lowpass
 from identification.recording import STANDARD_GRAVITY
 
 from tractor_cases import ARRIVALS, C, H, K, L, LOADS, TIRES, V, W  # noqa: F401

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from identification.diagnose.joint_timing import BODY_DEFAULTS, joint_timing, scaled_timing
-from identification.diagnose.tractor import TractorProblem
+from identification.model.fitting import TractorProblem
 from identification.rig import run_rig
 
 #: A tractor with a pivoting front axle and enveloping tires at 5.2 km/h, the right cleat 0.1 s first (a

@@ -2,7 +2,7 @@
 
 A force element between road and hub in absolute coordinates (SI units, z
 upwards, x along the travel): the point-contact spring k parallel to damper c,
-with the options of ``identification/tire_law.py`` (:func:`extended_tire`),
+with the options of ``identification/model/tire_law.py`` (:func:`extended_tire`),
 each a tunable parameter whose default switches it off — a built-in
 cleat, rectangular or bevelled (a trapezoid, ``cleat_bevel``), enveloped by a
 footprint (uniform contact pressure, or parabolic with

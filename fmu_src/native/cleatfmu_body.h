@@ -22,7 +22,7 @@
 #if MODEL_BODY
 #define BODY_TIRES 4
 #define BODY_COORDINATES 4
-/* Standard gravity, m/s^2 (identification.recording.STANDARD_GRAVITY). */
+/* Standard gravity, m/s^2 (identification.recording.record.STANDARD_GRAVITY). */
 #define BODY_GRAVITY 9.80665
 
 /* Hub and seat outputs at `time` from the state (or the initial values before the first step) and,

@@ -1,4 +1,4 @@
-/* The tire force law (see cleatfmu_law.h and identification/tire_law.py). */
+/* The tire force law (see cleatfmu_law.h and identification/model/tire_law.py). */
 #include <math.h>
 
 #include "cleatfmu_law.h"

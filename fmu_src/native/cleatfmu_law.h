@@ -1,6 +1,6 @@
 /* The tire force law of cleatfmu in portable C99 (libm only).
  *
- * A transcription of identification/tire_law.py (point_contact, extended_tire):
+ * A transcription of identification/model/tire_law.py (point_contact, extended_tire):
  * the same operations in the same order, so that both agree to round-off
  * (compile with -ffp-contract=off: no fused multiply-add).  SI units, z up:
  * deflection d = r0 - (hub_z - road), rate dd = d(road)/dt - hub_vz,

@@ -6,7 +6,7 @@ tracks: each tire rolls on its side's track at its own distance behind the
 front axle, so the rear tires meet the front tires' road a wheelbase later
 (the front/rear delay L / v), and the left and right tracks are as coherent as
 the profile makes them.  The same record runs in the compiled stepping and in
-the FMU master (:func:`~identification.tractor_cosim.run_tractor_fmus`), so a
+the FMU master (:func:`~identification.fmu.tractor_cosim.run_tractor_fmus`), so a
 parameter set and its exported FMUs ride the same road.
 
 The seat is a point of the body, ``seat_x_m`` behind the front axle and
@@ -25,108 +25,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..model.tractor import LEFT_TIRES, Body, Cleat, Inputs, TractorModel
-from ..recording import FRONT_TIRES
+from ..model.ride import RAMP_M, RideModel, ride_model, seat_row
+from ..model.tractor import Body, TractorModel
 
 __all__ = ["RideModel", "ride_model", "seat_row", "seat_acceleration", "ride", "RideRun", "parameter_sets",
            "check_set_names", "ride_comparison", "REPORT_RIDE", "RAMP_M"]
-
-#: Length over which the profile is faded in from zero under every tire, m (the tractor starts at rest on
-#: level ground).
-RAMP_M = 5.0
-
-
-@dataclass(frozen=True, eq=False)
-class RideModel(TractorModel):
-    """A model record whose road is a profile of two tracks (see the module docstring).
-
-    Parameters
-    ----------
-    road_x_m, road_left_m, road_right_m : ndarray
-        The profile: positions along the road (increasing, m) and the left and right track heights (m).
-    offsets_m : tuple of float
-        Each tire's distance behind the front axle, m (0 front, the wheelbase rear).
-    """
-
-    road_x_m: np.ndarray = None
-    road_left_m: np.ndarray = None
-    road_right_m: np.ndarray = None
-    offsets_m: tuple = ()
-
-    def inputs(self, start_s: float, step_s: float, n: int) -> Inputs:
-        """Road height and rate under every tire on the grid start + i h (no cleat edges)."""
-        base = super().inputs(start_s, step_s, n)   # flat road and the longitudinal positions
-        v = self.cleat.speed_m_s
-        t = start_s + step_s * np.arange(n)
-        x0 = float(self.road_x_m[0])
-        z = np.zeros((len(self.tires), n))
-        vz = np.zeros_like(z)
-        for j, tire in enumerate(self.tires):
-            track = self.road_left_m if tire in LEFT_TIRES else self.road_right_m
-            x = x0 + v * t - self.offsets_m[j]
-            height = np.interp(x, self.road_x_m, track, left=0.0, right=0.0)
-            slope = np.interp(x, self.road_x_m, np.gradient(track, self.road_x_m), left=0.0, right=0.0)
-            # faded in over RAMP_M from the tire's first metre on the profile
-            s = np.clip((x - x0) / RAMP_M, 0.0, 1.0)
-            fade = s * s * (3.0 - 2.0 * s)
-            dfade = np.where((s > 0) & (s < 1), 6.0 * s * (1.0 - s) / RAMP_M, 0.0)
-            z[j] = fade * height
-            vz[j] = v * (fade * slope + dfade * height)
-        return Inputs(z, vz, base.hub_x, base.hub_vx, edges=())
-
-
-def ride_model(body: Body, laws, *, speed_m_s: float, road_x_m, road_left_m, road_right_m) -> RideModel:
-    """The model record of `body` on its tires' `laws` driving the profile at `speed_m_s`.
-
-    Parameters
-    ----------
-    body : Body
-        The tractor (rigid or with a pivoting front axle), four tires.
-    laws : sequence of dict
-        Extended tire-law parameters per tire (point contact: no built-in cleat).
-    speed_m_s : float
-    road_x_m, road_left_m, road_right_m : array_like
-        The road profile (see :class:`RideModel`).
-    """
-    if body.kind not in ("rigid", "pivot"):
-        raise ValueError(f"a ride needs the whole tractor (rigid or pivoting front axle), got {body.kind!r}")
-    if not (speed_m_s > 0 and math.isfinite(speed_m_s)):
-        raise ValueError(f"speed_m_s must be finite and > 0, got {speed_m_s!r}")
-    x = np.asarray(road_x_m, dtype=float)
-    left, right = np.asarray(road_left_m, dtype=float), np.asarray(road_right_m, dtype=float)
-    if x.ndim != 1 or x.size < 2 or left.shape != x.shape or right.shape != x.shape or np.any(np.diff(x) <= 0):
-        raise ValueError("the road needs increasing positions and one height per position on each track")
-    if any(law["cleat_height"] > 0 for law in laws):
-        raise ValueError("a ride's tires have no built-in cleat: the road is the profile")
-    offsets = tuple(0.0 if t in FRONT_TIRES else float(body.wheelbase_m) for t in body.tires)
-    return RideModel(body=body, laws=tuple(laws), cleat=Cleat(0.0, 0.1, float(speed_m_s)),
-                     arrivals_s=tuple(0.0 for _ in body.tires), road_x_m=x, road_left_m=left,
-                     road_right_m=right, offsets_m=offsets)
-
-
-def seat_row(body: Body, *, seat_x_m: float, seat_y: float = 0.0) -> np.ndarray:
-    """The seat's vertical displacement per generalized coordinate of `body` (one row like J's).
-
-    Parameters
-    ----------
-    body : Body
-        Rigid or pivoting-front-axle tractor.
-    seat_x_m : float
-        Seat position behind the front axle, m.
-    seat_y : float
-        Seat position from the centre line as a fraction of the half-track (+ left).
-    """
-    if body.kind not in ("rigid", "pivot"):
-        raise ValueError(f"a seat needs the whole tractor, got a {body.kind!r} body")
-    W = np.array(body.loads_n, dtype=float)
-    front = np.array([t in FRONT_TIRES for t in body.tires])
-    a = body.wheelbase_m * W[~front].sum() / W.sum()
-    ybar = float(sum((1.0 if t in LEFT_TIRES else -1.0) * w for t, w in zip(body.tires, W)) / W.sum())
-    row = [1.0, a - seat_x_m, seat_y - ybar]
-    if body.pivot:
-        row.append(0.0)
-    return np.array(row)
-
 
 def seat_acceleration(model: TractorModel, trajectory, *, seat_x_m: float, seat_y: float = 0.0) -> np.ndarray:
     """The seat's vertical acceleration on the trajectory's grid, m/s² (from the hubs' accelerations:
@@ -215,7 +118,7 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
 
 
 def _point_contact(k: float, c: float, load: float) -> dict:
-    from .. import tire_law
+    from ..model import tire_law
 
     return dict(tire_law.EXTENDED_DEFAULTS, stiffness=float(k), damping=float(c), static_load=float(load))
 
@@ -270,9 +173,9 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
             sets[name] = _params_set(name)
         elif name in ("paper", "waveform"):
             if name == "paper":
-                from ..identify import identify as method
+                from ..identify.paper import identify as method
             else:
-                from ..waveform import identify_waveform_recording as method
+                from ..identify.waveform import identify_waveform_recording as method
             results = method(rec, list(TIRES))
             sets[name] = ({t: results[t].k for t in TIRES}, {t: results[t].c for t in TIRES})
         else:
@@ -307,7 +210,7 @@ def _fmu_set(name: str) -> tuple:
     from fmpy import read_model_description
 
     from ..recording import TIRES
-    from ..simulate_inputs import tractor_fmu_paths
+    from ..fmu.simulate_inputs import tractor_fmu_paths
 
     folder = name.split("=", 1)[1]
     paths = tractor_fmu_paths(folder)
@@ -326,7 +229,7 @@ def _fmu_set(name: str) -> tuple:
 def _params_set(name: str) -> tuple:
     """(k, c) per tire of ``params=FILE``: a ``cleatfmu identify --json`` document of all four tires (either
     method), each tire's k and c checked as ``export`` checks them."""
-    from ..export import read_identified
+    from ..fmu.export import read_identified
     from ..recording import TIRES
 
     path = name.split("=", 1)[1]
@@ -347,7 +250,7 @@ def _stiffness(name: str) -> float:
         if not Path(value).is_file():
             raise InputError("--compare", f"{name!r}: static=K needs a stiffness K in N/m (e.g. static=300e3) or "
                                           f"a compression test's CSV file") from None
-        from ..static import static_stiffness_file
+        from ..identify.static import static_stiffness_file
         k = static_stiffness_file(value).k_N_per_m
     if not (math.isfinite(k) and 1e4 <= k <= 1e8):
         raise InputError("--compare", f"{name!r}: a tire stiffness of 1e4 .. 1e8 N/m is expected")

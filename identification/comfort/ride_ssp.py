@@ -1,7 +1,7 @@
 """The ride as systems of FMUs: one SSP 1.0 archive per tire parameter set (``cleatfmu ride --ssp DIR``).
 
-Each archive is the ride's model record (:func:`identification.comfort.ride.ride_model`) as written by
-:func:`identification.ssp.write_tractor_ssp`: the body FMU, four tire FMUs with the set's k and c and
+Each archive is the ride's model record (:func:`identification.model.ride.ride_model`) as written by
+:func:`identification.fmu.ssp.write_tractor_ssp`: the body FMU, four tire FMUs with the set's k and c and
 the road profile FMU with the ride's two tracks, default experiment over the ride's duration.  In a host
 that steps the body, then the road and the tires (sequential exchange) it reproduces ``ride`` to
 round-off; fixed-step hosts that exchange once after all steps add a one-step force delay.
@@ -29,8 +29,9 @@ def write_ride_ssps(folder, body, sets: dict, *, road, speed_m_s: float, duratio
                     seat_y: float = 0.0, step_s: float = 1e-3) -> dict:
     """Write ``folder/<set>.ssp`` for every set ``name -> (k, c)``, all together or none; returns name -> Path."""
     from .._files import publish_files
-    from ..ssp import write_tractor_ssp
-    from .ride import _point_contact, ride_model
+    from ..fmu.ssp import write_tractor_ssp
+    from ..model.ride import ride_model
+    from .ride import _point_contact
 
     folder = Path(folder)
     names = {name: ssp_file_name(name) for name in sets}

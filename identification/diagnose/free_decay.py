@@ -3,7 +3,7 @@
 Where a hub rings as an independent corner (the diagnosis names no body coupling) with a linear tire
 (no friction, no progressive stiffness: the decay's shape is then the damped sinusoid, and the fit
 explains its window to R² >= :data:`MIN_DECAY_R2`), the waveform fit of its free decay
-(:func:`identification.waveform.identify_waveform`) gives k and c from the part of the record that
+(:func:`identification.identify.waveform.identify_waveform`) gives k and c from the part of the record that
 needs the least of the model: the tire on flat ground.  The joint fit's k and c
 must agree with it within their joint 95 % interval, √(h_joint² + h_decay²) (h the half-widths).
 Where the joint fit's k or c lies outside the free decay's own 95 % interval, the joint fit was pulled
@@ -35,9 +35,9 @@ from __future__ import annotations
 import math
 
 from ..errors import InputError
-from ..preprocess import preprocess
+from ..recording.preprocess import preprocess
 from ..recording import STANDARD_GRAVITY
-from ..waveform import identify_waveform
+from ..identify.waveform import identify_waveform
 
 __all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS", "UNDETERMINED_SHARE"]
 

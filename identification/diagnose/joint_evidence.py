@@ -30,7 +30,7 @@ import math
 
 import numpy as np
 
-from ..condition import ENGINE_BAND_HZ
+from ..recording.condition import ENGINE_BAND_HZ
 from ..recording import FRONT_TIRES, STANDARD_GRAVITY
 from .joint_fit import TractorFit
 

@@ -30,9 +30,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize, stats
 
-from ..waveform import long_run_variance_ratio
+from ..identify.waveform import long_run_variance_ratio
 from .joint_jacobian import FAILED, GroupedJacobian, channel_dependence
-from .tractor import SIGNED, TractorFitModel
+from ..model.fitting import SIGNED, UNEXPLAINED_RATIO, TractorFitModel
 
 
 def _exp(x: float) -> float:
@@ -44,8 +44,6 @@ __all__ = ["TractorFit", "fit_tractor", "sse_of", "unexplained", "sandwich_covar
            "residual_correlation_lag",
            "UNEXPLAINED_RATIO"]
 
-#: A channel whose residual RMS exceeds this multiple of its noise RMS holds unexplained signal.
-UNEXPLAINED_RATIO = 1.5
 #: Largest half-step move (log scale for positive parameters) applied to the estimates.
 MAX_STEP_SHIFT = 0.02
 #: The impact-weight check: the impacts (onset - lead until the tire has rolled over the cleat and this

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..recording import FRONT_TIRES
-from .tractor import BODY_EFFECTS, TractorFitModel
+from ..model.fitting import BODY_EFFECTS, TractorFitModel
 
 __all__ = ["channel_dependence", "column_groups", "forward_steps", "GroupedJacobian"]
 

@@ -1,6 +1,6 @@
 """Whole-tractor diagnosis: forward selection of effects at the recording level, honest about what is left.
 
-Round by round every available effect (:data:`~identification.diagnose.tractor.EFFECTS`)
+Round by round every available effect (:data:`~identification.model.fitting.EFFECTS`)
 is added to the current model and the extended model is fitted to all
 channels.  A candidate qualifies when its BIC (on n_eff = n · min(1, 2 f_c / f_s)
 independent samples per channel) improves by ≥ 10, it removes ≥ 25 % of the
@@ -31,7 +31,7 @@ from .joint_start import (ENVELOPE_GUESS_M, body_start, enveloped_timings, perio
                           rescue_start, starting_values)
 from .joint_signs import settle_signs
 from .joint_timing import BODY_DEFAULTS
-from .tractor import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, parameter_unit
+from ..model.fitting import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, parameter_unit
 
 __all__ = ["TractorDiagnosis", "diagnose_tractor", "TractorCandidate"]
 
@@ -260,7 +260,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     Parameters
     ----------
     rec : Recording
-        Focused and conditioned here unless it was already (:func:`identification.window.focus`).
+        Focused and conditioned here unless it was already (:func:`identification.recording.window.focus`).
     cutoff_hz : float
         Low-pass cut-off of the comparison, Hz.
     effects : iterable of str
@@ -274,7 +274,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     """
     from dataclasses import replace
 
-    from ..window import focus
+    from ..recording.window import focus
 
     t0 = time.perf_counter()
     rec = focus(rec, cutoff_hz=cutoff_hz, announce=False)   # itself when the caller focused it

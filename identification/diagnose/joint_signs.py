@@ -1,6 +1,6 @@
 """Sensor signs the conditioning could not settle, settled by the joint fit.
 
-The conditioning (:mod:`identification.condition`) reads a channel's sign from the first excursion of
+The conditioning (:mod:`identification.recording.condition`) reads a channel's sign from the first excursion of
 its own impact.  Two cases are left open there:
 
 * ``flip_ambiguous``: the two front channels start their impacts together with opposite signs and

@@ -15,12 +15,12 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..identify import identify_paper
-from ..preprocess import preprocess
+from ..identify.paper import identify_paper
+from ..recording.preprocess import preprocess
 from ..recording import FRONT_TIRES
-from ..waveform import identify_waveform
+from ..identify.waveform import identify_waveform
 from .joint_timing import joint_timing, scaled_timing
-from .tractor import TractorProblem
+from ..model.fitting import TractorProblem
 
 __all__ = ["tire_start", "starting_values", "rescue_start", "enveloped_timings", "body_start", "refine_timing", "ENVELOPE_GUESS_M",
            "periodic_start"]

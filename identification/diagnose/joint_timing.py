@@ -25,11 +25,11 @@ import math
 import numpy as np
 from scipy.signal import fftconvolve
 
-from ..acquisition import sensed_acceleration
+from ..model.acquisition import sensed_acceleration
 from ..model.kernels import run_model
-from ..preprocess import lowpass
+from ..recording.preprocess import lowpass
 from ..recording import FRONT_TIRES
-from .tractor import TractorFitModel, TractorProblem
+from ..model.fitting import TractorFitModel, TractorProblem
 
 __all__ = ["joint_timing", "scaled_timing", "BODY_DEFAULTS", "MAX_STAGGER_S", "DELAY_RANGE"]
 

@@ -4,7 +4,7 @@ diagnose`` (and the batch's), and what the diagnosis has to warn of."""
 from __future__ import annotations
 
 from ..errors import InputError
-from ..preprocess import DEFAULT_CUTOFF_HZ
+from ..recording.preprocess import DEFAULT_CUTOFF_HZ
 
 __all__ = ["run_diagnosis", "run_tractor_diagnosis", "diagnosis_warnings"]
 
@@ -30,7 +30,7 @@ def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=
     With `fmu_dir` the extended FMUs are kept there as ``<stem>_<TIRE>.fmu`` (`stem`: the recording's); FMUs
     that cannot start are then an error unless `strict` is off (then none is kept, and a warning says why).
     """
-    from ..tractor_cosim import measure_tractor_gain
+    from ..fmu.tractor_cosim import measure_tractor_gain
     from .joint_select import diagnose_tractor
 
     diag = diagnose_tractor(rec, cutoff_hz=cutoff_hz, workers=workers, progress=progress, channels=channels)
@@ -47,7 +47,7 @@ def diagnosis_warnings(diag, gain) -> list[str]:
     """What the diagnosis itself has to warn of (one sentence each): a cleat profile its footprint models
     approximate, the sensor signs it settled, a refit at the fitted delay's speed, a baseline whose FMUs
     could not start.  The conditioning's warnings come
-    before it (:func:`identification.window.focus`)."""
+    before it (:func:`identification.recording.window.focus`)."""
     from .joint_signs import AS_RECORDED
 
     out = []

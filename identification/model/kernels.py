@@ -1,6 +1,6 @@
 """The stepping scheme of :mod:`identification.model.stepping`, compiled with numba for the fitting models.
 
-The tire law compiled here is :func:`identification.tire_law.tire_force`
+The tire law compiled here is :func:`identification.model.tire_law.tire_force`
 itself (numba compiles the plain-Python function), and the loop performs the
 reference's operations in the same order, so the two agree to round-off
 (tested ≤ 1e-12 relative).  The first call in a process compiles (a few
@@ -13,8 +13,8 @@ import types
 
 import numpy as np
 
-from .. import tire_law
-from ..scheme import Trajectory
+from . import tire_law
+from .scheme import Trajectory
 from .stepping import prepared, trajectory_from_arrays
 from .tractor import TractorModel
 
@@ -142,8 +142,8 @@ def drop_stale_cache(stem: str, tag: str, dependency) -> None:
 
     numba keys a cached function on its own file only, so a kernel compiled
     with an older version of what it calls from another module (the tire law
-    :func:`identification.tire_law.tire_force`, the chain's
-    :func:`identification.acquisition.hold`) would be reused; a marker named
+    :func:`identification.model.tire_law.tire_force`, the chain's
+    :func:`identification.model.acquisition.hold`) would be reused; a marker named
     ``<stem>.<tag>-<hash of the dependency's source>`` tells the versions apart.
     """
     import hashlib

@@ -1,23 +1,23 @@
 """What a model's accelerometers show after the analysis low-pass: every channel in one compiled pass.
 
 The reference, channel by channel, is
-:func:`identification.acquisition.sensed_acceleration` (the hub motion through
+:func:`identification.model.acquisition.sensed_acceleration` (the hub motion through
 the acquisition chain, or the mean acceleration over each sample interval
 without an anti-alias filter) followed by
-:func:`identification.preprocess.lowpass` (:func:`sensed_lowpassed_reference`).
+:func:`identification.recording.preprocess.lowpass` (:func:`sensed_lowpassed_reference`).
 :func:`sensed_lowpassed` computes the same for all channels at once with numba
 kernels (Python only packs the impulses into arrays):
 
 * the hub velocity is reconstructed as
-  :meth:`identification.scheme.Trajectory.velocity_at` does (linear between
+  :meth:`identification.model.scheme.Trajectory.velocity_at` does (linear between
   grid points, jumping at the impulses), the jumps summed by prefix sums;
 * the chain's modes are advanced side by side (:func:`_chain_rows`, the
-  recursion of :func:`identification.acquisition.apply_chain` with the
-  velocity form of :func:`~identification.acquisition.sensed_acceleration`);
+  recursion of :func:`identification.model.acquisition.apply_chain` with the
+  velocity form of :func:`~identification.model.acquisition.sensed_acceleration`);
 * the zero-phase low-pass filters all channels side by side
   (:func:`_filtfilt_rows`: odd extension, steady-state initial conditions and
   the section-by-section recursion of ``scipy.signal.sosfilt``, forward then
-  backward, as the fast path of :func:`~identification.preprocess.lowpass`).
+  backward, as the fast path of :func:`~identification.recording.preprocess.lowpass`).
 
 The two agree to round-off (tested ≤ 1e-12 relative over every model effect,
 with and without a chain).  Without numba the reference is used.
@@ -30,9 +30,9 @@ import math
 
 import numpy as np
 
-from .. import acquisition
-from ..acquisition import sensed_acceleration
-from ..preprocess import FILTER_ORDER, lowpass, lowpass_design
+from . import acquisition
+from .acquisition import acquisition_modes, sensed_acceleration
+from ..recording.preprocess import FILTER_ORDER, lowpass, lowpass_design
 from .kernels import drop_stale_cache
 
 __all__ = ["sensed_lowpassed", "sensed_lowpassed_reference", "sensed_accelerations"]
@@ -49,13 +49,13 @@ def sensed_lowpassed_reference(traj, time_s, sample_rate_hz: float, acquisition_
 
     Parameters
     ----------
-    traj : identification.scheme.Trajectory
+    traj : identification.model.scheme.Trajectory
         The model's hub motion.
     time_s : ndarray
         Sample times, s.
     sample_rate_hz : float
         Sampling rate of the recording, Hz.
-    acquisition_chain : identification.acquisition.Acquisition or None
+    acquisition_chain : identification.model.acquisition.Acquisition or None
         The recording's acquisition chain.
     cutoff_hz : float
         Cut-off of the zero-phase low-pass, Hz.
@@ -93,7 +93,7 @@ def sensed_lowpassed(traj, time_s, sample_rate_hz: float, acquisition_chain, *, 
 
 def sensed_accelerations(traj, time_s, sample_rate_hz: float, acquisition_chain, *,
                          tires: int | None = None) -> np.ndarray:
-    """:func:`identification.acquisition.sensed_acceleration` of the first `tires` rows (default all), m/s².
+    """:func:`identification.model.acquisition.sensed_acceleration` of the first `tires` rows (default all), m/s².
 
     Parameters as :func:`sensed_lowpassed_reference`; without an anti-alias
     filter (or `acquisition_chain` None), the mean acceleration over each
@@ -126,7 +126,7 @@ def _folded_modes(acquisition_chain):
     Returns (poles, residues, fold, direct): fold 2 for a kept complex pole, 1
     for a real one; direct = Re Σ residues over all modes.
     """
-    poles, residues, _ = acquisition_chain.modes()
+    poles, residues, _ = acquisition_modes(acquisition_chain)
     keep, fold, dropped = [], [], set()
     for j, (p, r) in enumerate(zip(poles, residues)):
         if j in dropped:
@@ -181,7 +181,7 @@ def _cells(grid, time_s, offset):
 
 
 def _smooth(v, grid, h, te, je):
-    """The velocity without its jumps (:meth:`~identification.scheme.Trajectory.velocity_at`'s ``smooth``).
+    """The velocity without its jumps (:meth:`~identification.model.scheme.Trajectory.velocity_at`'s ``smooth``).
 
     Each impulse (t_e, j_e) takes j_e off the grid points after t_e, half of it
     off a point within half a step of t_e.
@@ -247,7 +247,7 @@ def _mean_rows(v, grid, h, ptr, edge_t, edge_j, time_s, interval_s):
 
 
 def _grid_velocity(v, grid, h, te, je):
-    """The velocity on the grid and its cuts for :func:`identification.acquisition.apply_chain`.
+    """The velocity on the grid and its cuts for :func:`identification.model.acquisition.apply_chain`.
 
     Returns x (with the jumps of the impulses at or before each point) and, at
     the distinct impulse times inside the grid (jumps merged): their cell, time
@@ -282,8 +282,8 @@ def _grid_velocity(v, grid, h, te, je):
 def _chain_rows(v, grid, h, ptr, edge_t, edge_j, time_s, poles, rho, weights, fold, direct):
     """Every row's velocity through the chain (modes side by side), interpolated at the samples.
 
-    Per row: :func:`identification.acquisition.sensed_acceleration`, i.e.
-    :func:`identification.acquisition.apply_chain` of the velocity x with
+    Per row: :func:`identification.model.acquisition.sensed_acceleration`, i.e.
+    :func:`identification.model.acquisition.apply_chain` of the velocity x with
     residues ρ_j = r_j p_j, start weights w_j = r_j and cuts at the (merged)
     impulse times, plus Re Σ r_j times x.  Each mode carries one state
     ζ_j = ρ_j z_j − w_j e^{p_j (t − t0)} x(t0), which the hold advances like

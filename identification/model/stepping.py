@@ -14,8 +14,8 @@ the road rate set to zero; the difference is the damper's impulse, which
 makes the hub velocity jump (j = h M⁻¹ Jᵀ ΔF, half of which the trapezoidal
 update has already spread into the step) and is recorded so that the
 trajectory's velocity jumps at the edge time itself.  A corner and a half-tractor
-(:func:`identification.scheme.corner_body`, :func:`~identification.scheme.half_tractor_body`) are bodies of
-one and two coordinates; :func:`identification.master.step_body_fmus` is this scheme with the FMI calls inline.
+(:func:`identification.model.scheme.corner_body`, :func:`~identification.model.scheme.half_tractor_body`) are bodies of
+one and two coordinates; :func:`identification.fmu.master.step_body_fmus` is this scheme with the FMI calls inline.
 
 :mod:`identification.model.kernels` runs the same operations, in the same
 order, compiled; the two agree to round-off (tested ≤ 1e-12).
@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..scheme import Trajectory
+from .scheme import Trajectory
 from .tractor import Inputs, TractorModel
 
 __all__ = ["run_body", "run_model_python", "edge_jumps", "step_lists", "trajectory_from_arrays"]
@@ -33,7 +33,7 @@ __all__ = ["run_body", "run_model_python", "edge_jumps", "step_lists", "trajecto
 
 def run_body(forces, *, J, mass, static_z, loads_n, inputs: Inputs, start_s: float, step_s: float,
              q0=None, dq0=None, before_step=None) -> Trajectory:
-    """Step the body on its tires; returns the :class:`~identification.scheme.Trajectory` (tires in J's rows).
+    """Step the body on its tires; returns the :class:`~identification.model.scheme.Trajectory` (tires in J's rows).
 
     Parameters
     ----------
@@ -164,7 +164,7 @@ def edge_jumps(Jl, minv, f, fs, h: float, jumps_row) -> list:
 
 
 def trajectory_from_arrays(Z, V, F, A, jumps, *, inputs: Inputs, start_s, step_s, static_z) -> Trajectory:
-    """The :class:`~identification.scheme.Trajectory` of a stepped run, its impulses at the true edge times."""
+    """The :class:`~identification.model.scheme.Trajectory` of a stepped run, its impulses at the true edge times."""
     points = inputs.edge_points.tolist()
     nt = Z.shape[0]
     impulses = [[] for _ in range(nt)]
@@ -190,7 +190,7 @@ def prepared(model: TractorModel, start_s: float, step_s: float, n: int):
 
 def run_model_python(model: TractorModel, start_s: float, step_s: float, n: int) -> Trajectory:
     """The model record stepped with the tire law in plain Python (the reference of the compiled kernel)."""
-    from .. import tire_law
+    from . import tire_law
 
     J, mass, static_z, loads, inputs, q0, dq0 = prepared(model, start_s, step_s, n)
     forces = []

@@ -55,7 +55,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import tire_law
+from . import tire_law
 from ..recording import FRONT_TIRES, STANDARD_GRAVITY, TIRES
 
 __all__ = ["Body", "Cleat", "TractorModel", "Inputs", "cleat_inputs", "LEFT_TIRES", "side_sign"]
@@ -215,7 +215,7 @@ _matrices = functools.lru_cache(maxsize=64)(Body._matrices)
 @dataclass(frozen=True)
 class Cleat:
     """The cleat: height and width (m) in the driving direction, crossed at `speed_m_s`, and its cross-section
-    (:class:`identification.cleat.CleatProfile`; None: rectangular)."""
+    (:class:`identification.recording.cleat.CleatProfile`; None: rectangular)."""
 
     height_m: float
     width_m: float
@@ -313,7 +313,7 @@ class TractorModel:
     body : Body
     laws : tuple of dict
         Extended tire-law parameters per tire (see
-        :data:`identification.tire_law.EXTENDED_DEFAULTS`); a law with a
+        :data:`identification.model.tire_law.EXTENDED_DEFAULTS`); a law with a
         built-in cleat (``cleat_height`` > 0) places the cleat itself.
     cleat : Cleat
     arrivals_s : tuple of float
@@ -330,7 +330,7 @@ class TractorModel:
         return self.body.tires
 
     def law_matrix(self) -> np.ndarray:
-        """The laws as flat vectors (tires × :data:`identification.tire_law.LAW_FIELDS`)."""
+        """The laws as flat vectors (tires × :data:`identification.model.tire_law.LAW_FIELDS`)."""
         return np.array([tire_law.law_vector(p) for p in self.laws], dtype=float)
 
     def builtin_cleat(self, i: int) -> bool:

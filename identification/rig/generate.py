@@ -146,7 +146,7 @@ def run_rig(effects=(), overrides: dict | None = None, *, seed: int = 0) -> RigR
 
 def _profile(v: dict):
     """The cleat's profile from ``cleat.profile_mm`` or ``cleat.bevel_m`` (None: rectangular)."""
-    from ..cleat import CleatProfile, parse_profile
+    from ..recording.cleat import CleatProfile, parse_profile
 
     if v["cleat.profile_mm"]:
         pts = [[float(c) for c in item.split(":")] for item in v["cleat.profile_mm"].split(",")]

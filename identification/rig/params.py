@@ -148,7 +148,7 @@ def _coerce(key: str, value: Any) -> Any:
 
 
 #: Plausible range (low, high, what) of each numeric option, in the option's unit; every default lies inside.
-#: The quantities a recording carries have the ranges of :data:`identification.plausibility.RANGES` (the rig
+#: The quantities a recording carries have the ranges of :data:`identification.recording.plausibility.RANGES` (the rig
 #: shares no code with the pipeline but the recording format; ``tests/test_plausibility.py`` compares them).
 RANGES: dict[str, tuple[float, float, str]] = {
     "speed_kmh": (0.5, 60.0, "a tractor's speed over a cleat"),

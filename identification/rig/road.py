@@ -14,10 +14,10 @@ With ℓ > 0 the tire feels the cleat for (ℓ + w) / v, and never a step.
 
 Lug passing adds A sin(2π f t + φ) per tire (periodic_disturbance).
 
-A cleat `profile` other than the rectangle (:class:`identification.cleat.CleatProfile`, bevelled or
+A cleat `profile` other than the rectangle (:class:`identification.recording.cleat.CleatProfile`, bevelled or
 piecewise linear) replaces the pulse: under a point contact the road is the profile itself (steps
 only at its vertical edges, a finite rate v dz/dx on its slopes), under a footprint its parabolic
-average (:meth:`~identification.cleat.CleatProfile.averaged`).
+average (:meth:`~identification.recording.cleat.CleatProfile.averaged`).
 """
 
 from __future__ import annotations

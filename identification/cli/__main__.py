@@ -1,0 +1,7 @@
+"""``python -m identification.cli``."""
+
+import sys
+
+from .command_line import main
+
+sys.exit(main())

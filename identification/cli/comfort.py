@@ -1,0 +1,223 @@
+"""``cleatfmu comfort ACC.csv``: whole-body vibration of an acceleration record by ISO 2631-1.
+
+The record is a CSV file with a header: the first column is time in s
+(strictly increasing, uniformly sampled: every step within 1 % of the nominal
+step, at least 1 s), every other column an acceleration in m/s² (a
+``cleat-recording/1`` CSV qualifies).  Each column is weighted (Wk, Wd or Wf)
+and evaluated by :func:`identification.comfort.iso2631.comfort`; for Wk and Wd
+the daily exposure (8 h unless ``--exposure-h``) is compared with the
+whole-body values of EU directive 2002/44/EC.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from ..errors import InputError
+from .._files import json_text
+
+__all__ = ["add_parser", "run", "read_acceleration_csv", "DEFAULT_EXPOSURE_H"]
+
+#: Daily exposure time assumed for Wk and Wd when none is given, h.
+DEFAULT_EXPOSURE_H = 8.0
+#: Shortest accepted record, s (the running RMS's integration time).
+MIN_DURATION_S = 1.0
+#: Largest accepted deviation of a time step from the nominal step (relative).
+JITTER_TOLERANCE = 0.01
+_WEIGHTINGS = ("Wk", "Wd", "Wf")
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cleatfmu comfort``."""
+    p = subparsers.add_parser(
+        "comfort", help="whole-body vibration of an acceleration record (ISO 2631-1): a_w, VDV, MTVV, A(8)",
+        description="Frequency-weight every acceleration column of a CSV record (ISO 2631-1:1997 Annex A) and "
+                    "report the weighted RMS a_w, the vibration dose value VDV, the maximum transient vibration "
+                    "value MTVV (1 s running RMS) and the crest factor; for Wk and Wd also the daily exposure "
+                    "A(8) and daily VDV against the EU directive 2002/44/EC action and limit values.")
+    p.add_argument("acc", metavar="ACC.csv",
+                   help="CSV with a header; first column time in s (uniformly sampled), then accelerations in m/s²")
+    p.add_argument("--weighting", choices=_WEIGHTINGS, default="Wk",
+                   help="Wk vertical, Wd horizontal (x, y), Wf motion sickness (default: %(default)s)")
+    p.add_argument("--column", metavar="NAME", help="evaluate only this column (default: every acceleration column)")
+    p.add_argument("--exposure-h", metavar="H",
+                   help=f"daily exposure time, h (0 < H <= 24), for A(8) and the daily VDV (default: "
+                        f"{DEFAULT_EXPOSURE_H:g} for Wk and Wd; Wf has no exposure values)")
+    p.add_argument("--json", action="store_true", help="print JSON (SI units) instead of a table")
+    p.set_defaults(func=run)
+
+
+def _exposure_h(text: str | None, weighting: str) -> float | None:
+    if text is None:
+        return None if weighting == "Wf" else DEFAULT_EXPOSURE_H
+    if weighting == "Wf":
+        raise InputError("--exposure-h", "Wf (motion sickness) has no daily-exposure values; use Wk or Wd")
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError("--exposure-h", f"{text!r} is not a number") from None
+    if not (math.isfinite(value) and 0 < value <= 24):
+        raise InputError("--exposure-h", f"a daily exposure time must be > 0 and <= 24 h, got {text}")
+    return value
+
+
+def read_acceleration_csv(path) -> tuple[list[str], float, dict]:
+    """Read and check an acceleration record: its column names, sampling rate (Hz) and columns (m/s²).
+
+    Parameters
+    ----------
+    path : str or path-like
+        CSV with a header; first column time in s, other columns accelerations in m/s².
+
+    Returns
+    -------
+    names : list of str
+        The acceleration columns' names, in file order.
+    sample_rate_hz : float
+        (n - 1) / (t[-1] - t[0]).
+    columns : dict of str to ndarray
+        Each acceleration column.
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file, malformed header or cell, non-finite value,
+        time not strictly increasing or not uniformly sampled, record shorter than 1 s.
+    """
+    import numpy as np
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "no such file" if not path.exists() else "not a file")
+    try:
+        lines = path.read_text(encoding="utf-8-sig").splitlines()
+    except UnicodeDecodeError:
+        raise InputError(path, "not a UTF-8 text file") from None
+    if not lines or not lines[0].strip():
+        raise InputError(path, "empty file (expected a header 'time,<columns>')")
+    header = [h.strip() for h in lines[0].split(",")]
+    if len(header) < 2:
+        raise InputError(path, "no acceleration column (expected a header 'time,<columns>')")
+    if not all(header):
+        raise InputError(path, f"empty column name in the header (column {header.index('') + 1})")
+    dupes = sorted({h for h in header if header.count(h) > 1})
+    if dupes:
+        raise InputError(path, f"duplicate column {dupes[0]!r}")
+    numbered = [(i + 2, ln) for i, ln in enumerate(lines[1:]) if ln.strip()]
+    if len(numbered) < 2:
+        raise InputError(path, f"record too short: {len(numbered)} samples")
+    for lineno, line in numbered:
+        cells = line.split(",")
+        if len(cells) != len(header):
+            raise InputError(path, f"line {lineno}: expected {len(header)} cells, found {len(cells)}")
+    try:
+        data = np.loadtxt([ln for _, ln in numbered], delimiter=",", dtype=float, ndmin=2)
+    except ValueError:
+        for lineno, line in numbered:
+            for name, cell in zip(header, line.split(",")):
+                try:
+                    float(cell)
+                except ValueError:
+                    raise InputError(path, f"line {lineno}, column {name}: {cell.strip()!r} is not a number") from None
+        raise InputError(path, "unreadable numeric data") from None  # pragma: no cover
+    if not np.all(np.isfinite(data)):
+        row, col = np.argwhere(~np.isfinite(data))[0]
+        raise InputError(path, f"line {numbered[row][0]}, column {header[col]}: non-finite value {data[row, col]}")
+    t = data[:, 0]
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.flatnonzero(dt <= 0)[0]) + 1
+        raise InputError(path, f"time is not strictly increasing at line {numbered[i][0]} "
+                               f"(t = {t[i]:g} s after {t[i - 1]:g} s)")
+    duration = float(t[-1] - t[0])
+    if duration < MIN_DURATION_S:
+        raise InputError(path, f"record too short: {duration:g} s (at least {MIN_DURATION_S:g} s needed for the "
+                               f"1 s running RMS)")
+    nominal = duration / (len(t) - 1)
+    worst = int(np.argmax(np.abs(dt - nominal)))
+    if abs(dt[worst] - nominal) > JITTER_TOLERANCE * nominal:
+        raise InputError(path, f"time is not uniformly sampled: step {dt[worst]:.6g} s at line "
+                               f"{numbered[worst + 1][0]} vs nominal {nominal:.6g} s "
+                               f"(tolerance {JITTER_TOLERANCE:.0%})")
+    names = header[1:]
+    return names, 1.0 / nominal, {name: data[:, j + 1] for j, name in enumerate(names)}
+
+
+def _fmt(x) -> str:
+    return "-" if x is None or not math.isfinite(x) else f"{x:.4g}"
+
+
+def format_table(path, weighting, results: dict) -> str:
+    """The human-readable report of :func:`run` (`results`: column name -> ComfortResult)."""
+    from ..comfort.iso2631 import (CREST_FACTOR_LIMIT, EU_A8_ACTION_M_S2, EU_A8_LIMIT_M_S2, EU_VDV_ACTION, EU_VDV_LIMIT,
+                          MTVV_RATIO_LIMIT, VDV_RATIO_LIMIT)
+
+    first = next(iter(results.values()))
+    width = max(8, *(len(n) for n in results))
+    lines = [f"{path}: ISO 2631-1 {weighting.name}, {weighting.description}, {first.sample_rate_hz:.6g} Hz, "
+             f"{first.duration_s:.4g} s"]
+    exposure = first.exposure
+    head = f"{'column':<{width}}{'a_w':>9}{'MTVV':>9}{'VDV':>10}{'crest':>7}"
+    units = f"{'':<{width}}{'m/s²':>9}{'m/s²':>9}{'m/s^1.75':>10}{'':>7}"
+    if exposure is not None:
+        head += f"{'A(8)':>9}{'daily VDV':>11}"
+        units += f"{'m/s²':>9}{'m/s^1.75':>11}"
+    elif first.msdv is not None:
+        head += f"{'MSDV':>9}"
+        units += f"{'m/s^1.5':>9}"
+    lines += [head, units]
+    for name, r in results.items():
+        row = f"{name:<{width}}{_fmt(r.a_w):>9}{_fmt(r.mtvv):>9}{_fmt(r.vdv):>10}{_fmt(r.crest_factor):>7}"
+        if r.exposure is not None:
+            row += f"{_fmt(r.exposure.a8):>9}{_fmt(r.exposure.vdv):>11}"
+        elif r.msdv is not None:
+            row += f"{_fmt(r.msdv):>9}"
+        lines.append(row)
+    if exposure is not None:
+        lines.append(f"daily exposure {exposure.exposure_h:g} h, k = {exposure.k:g}; EU 2002/44/EC: A(8) action "
+                     f"{EU_A8_ACTION_M_S2:g} / limit {EU_A8_LIMIT_M_S2:g} m/s², VDV action {EU_VDV_ACTION:g} / "
+                     f"limit {EU_VDV_LIMIT:g} m/s^1.75")
+        for name, r in results.items():
+            lines.append(f"  {name}: A(8) {r.exposure.a8_status.replace('_', ' ')} value, "
+                         f"daily VDV {r.exposure.vdv_status.replace('_', ' ')} value")
+    for name, r in results.items():
+        over = [f"{label} {_fmt(value)} > {limit:g}" for label, value, limit in
+                (("crest factor", r.crest_factor, CREST_FACTOR_LIMIT), ("MTVV/a_w", r.mtvv_ratio, MTVV_RATIO_LIMIT),
+                 ("VDV/(a_w T^1/4)", r.vdv_ratio, VDV_RATIO_LIMIT)) if value > limit]
+        if over:
+            lines.append(f"  {name}: {', '.join(over)}: shocks, which a_w underestimates (judge by MTVV and VDV)")
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    """``cleatfmu comfort``: returns the exit status; raises InputError for bad input."""
+    exposure_h = _exposure_h(args.exposure_h, args.weighting)
+    names, fs, columns = read_acceleration_csv(args.acc)
+    if args.column is not None:
+        if args.column not in names:
+            raise InputError("--column", f"{args.acc} has no column {args.column!r} (columns: {', '.join(names)})")
+        names = [args.column]
+    from ..comfort.iso2631 import comfort, get_weighting
+
+    weighting = get_weighting(args.weighting)
+    if fs < 2.0 * weighting.band_hz[1]:
+        raise InputError(args.acc, f"sampling rate {fs:.6g} Hz is too low for {weighting.name}: at least "
+                                   f"{2.0 * weighting.band_hz[1]:g} Hz needed (twice the {weighting.band_hz[1]:g} Hz "
+                                   f"upper end of its frequency range)")
+    results = {}
+    for name in names:
+        try:
+            results[name] = comfort(columns[name], fs, weighting, exposure_h=exposure_h)
+        except InputError as exc:
+            raise InputError(args.acc, f"column {name}: {exc.problem}") from None
+    if args.json:
+        docs = {name: r.to_json() for name, r in results.items()}
+        if len(names) == 1:
+            doc = {"file": str(args.acc), "column": names[0], **docs[names[0]]}
+        else:
+            doc = {"file": str(args.acc), "weighting": weighting.name, "sample_rate_hz": fs, "channels": docs}
+        print(json_text(doc))
+    else:
+        print(format_table(args.acc, weighting, results))
+    return 0

@@ -1,0 +1,115 @@
+"""``cleatfmu ride``: the whole tractor on an ISO 8608 road with each tire parameter set, rated at the seat.
+
+The body (rigid or pivoting front axle, dynamic indices) and the sets come
+from a whole-tractor recording (:func:`identification.comfort.ride.parameter_sets`);
+the ride from :func:`identification.comfort.ride.ride`; the rating is
+ISO 2631-1's Wk (vertical) at the seat.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from ..errors import InputError
+from .._files import json_text
+
+__all__ = ["add_parser", "run", "DEFAULT_COMPARE"]
+
+DEFAULT_COMPARE = "paper,final"
+_CLASSES = ("A", "B", "C", "D", "E")
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cleatfmu ride``."""
+    p = subparsers.add_parser(
+        "ride", help="the tractor on an ISO 8608 road with each tire parameter set: ISO 2631-1 a_w, VDV at the seat",
+        description="Diagnose a whole-tractor recording (body and tires), then drive that tractor over a random "
+                    "ISO 8608 road (two tracks, seeded) once per tire parameter set (--compare) and rate the seat's "
+                    "vertical acceleration by ISO 2631-1 (Wk): weighted RMS a_w, VDV, MTVV, crest factor, and the "
+                    "daily exposure A(8) against EU directive 2002/44/EC.")
+    p.add_argument("recording", metavar="REC.csv", nargs="?", help="a whole-tractor recording (four hubs)")
+    p.add_argument("--example", metavar="NAME", help="an embedded recording instead of REC.csv (7kmh, 10kmh)")
+    p.add_argument("--road", default="B", type=str.upper, help="ISO 8608 road class, A (best) .. E (default B)")
+    p.add_argument("--speed-kmh", type=float, default=None, help="driving speed, km/h (default: the recording's)")
+    p.add_argument("--duration-s", type=float, default=60.0, help="length of the ride, s (default 60)")
+    p.add_argument("--compare", default=DEFAULT_COMPARE,
+                   help="parameter sets, comma-separated: paper, waveform, final, static=K (K in N/m, or a "
+                        "compression test CSV as for the static command), fmu=DIR (the k, c of the four tire "
+                        "FMUs in DIR, *_FL.fmu .. *_RR.fmu, as exported), params=FILE (the k, c of an "
+                        "'identify --json' file of the four tires); "
+                        f"default {DEFAULT_COMPARE})")
+    p.add_argument("--seed", type=int, default=1, help="seed of the road profile (default 1)")
+    p.add_argument("--seat-x-m", type=float, default=None,
+                   help="seat position behind the front axle, m (default: 0.85 of the wheelbase)")
+    p.add_argument("--seat-y", type=float, default=0.0,
+                   help="seat position from the centre line, fraction of the half-track (+ left; default 0)")
+    p.add_argument("--exposure-h", type=float, default=8.0, help="daily exposure time for A(8), h (default 8)")
+    p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="processes of the diagnosis (default: 2 or the CPU count)")
+    p.add_argument("--json", action="store_true", help="print JSON (SI units)")
+    p.add_argument("--plot", metavar="OUT.png", help="write the seat's acceleration and a_w, VDV per set")
+    p.add_argument("--ssp", metavar="DIR", help="also write each set's ride as an SSP 1.0 system of native FMUs "
+                                                "(body, four tires, road profile): DIR/<set>.ssp")
+    p.set_defaults(func=run)
+
+
+def _check(args) -> list:
+    if args.road not in _CLASSES:
+        raise InputError("--road", f"unknown ISO 8608 class {args.road!r} (A, B, C, D or E)")
+    if args.speed_kmh is not None and not (math.isfinite(args.speed_kmh) and 1.0 <= args.speed_kmh <= 60.0):
+        raise InputError("--speed-kmh", f"a tractor's ride speed of 1 .. 60 km/h is expected, got {args.speed_kmh:g}")
+    if not (math.isfinite(args.duration_s) and 10.0 <= args.duration_s <= 3600.0):
+        raise InputError("--duration-s", f"10 .. 3600 s expected, got {args.duration_s:g}")
+    if not (math.isfinite(args.exposure_h) and 0 < args.exposure_h <= 24.0):
+        raise InputError("--exposure-h", f"0 .. 24 h expected, got {args.exposure_h:g}")
+    if not (math.isfinite(args.seat_y) and -1.5 <= args.seat_y <= 1.5):
+        raise InputError("--seat-y", f"a fraction of the half-track within ±1.5 is expected, got {args.seat_y:g}")
+    if args.seat_x_m is not None and not math.isfinite(args.seat_x_m):
+        raise InputError("--seat-x-m", f"a finite position is expected, got {args.seat_x_m:g}")
+    if args.workers < 1:
+        raise InputError("--workers", f"at least 1, got {args.workers}")
+    from ..comfort.ride import check_set_names
+
+    return check_set_names(args.compare.split(","))
+
+
+def run(args) -> int:
+    from .command_line import _recording_arg
+    from .util import check_output
+
+    names = _check(args)
+    check_output(args.plot, ".png", "plot")
+    if args.ssp is not None:
+        from .util import make_folders
+        make_folders(args.ssp)
+    rec = _recording_arg(args)
+    from ..comfort.ride import ride_comparison
+
+    if args.seat_x_m is not None and not -1.0 <= args.seat_x_m <= rec.wheelbase_m + 1.0:
+        raise InputError("--seat-x-m", f"the seat must be on the tractor (-1 .. wheelbase + 1 m), got {args.seat_x_m:g}")
+    from .util import announce_compilation
+    announce_compilation()
+    runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
+                                speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
+                                duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
+                                exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp)
+    speed, seat_x, how = doc["speed_m_s"], doc["seat"]["x_m"], doc["body"]["source"]
+    if args.plot:
+        from ..report.plots import plot_ride, save_png
+        save_png(plot_ride(runs, road_class=args.road, speed_m_s=speed), args.plot)
+    if args.json:
+        print(json_text(doc))
+    else:
+        print(f"{rec.source}: ISO 8608 class {args.road} road (seed {args.seed}), {speed * 3.6:.3g} km/h, "
+              f"{args.duration_s:g} s; {how}; seat {seat_x:.2f} m behind the front axle")
+        print(f"{'set':<16}{'k FL/FR/RL/RR kN/m':>24}{'a_w m/s2':>10}{'VDV':>8}{'MTVV':>8}{'A(8)':>8}")
+        for name, r in runs.items():
+            ks = "/".join(f"{r.k[t] / 1e3:.0f}" for t in r.k)
+            a8 = r.comfort.exposure.a8 if r.comfort.exposure else float("nan")
+            print(f"{name:<16}{ks:>24}{r.comfort.a_w:>10.3f}{r.comfort.vdv:>8.3f}{r.comfort.mtvv:>8.3f}{a8:>8.3f}")
+        if args.plot:
+            print(f"wrote {args.plot}")
+        for name, path in doc.get("ssp", {}).items():
+            print(f"wrote {path}: the ride with set {name} as an SSP 1.0 system of FMUs")
+    return 0
+

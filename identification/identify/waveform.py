@@ -1,0 +1,211 @@
+"""Waveform identification: a least-squares damped-sinusoid fit of the free decay.
+
+Beside the paper's two-peak method, cleatfmu fits the whole free vibration
+after the tire has left the cleat (the window of
+:mod:`identification.recording.preprocess`), sample by sample, on the recorded (not
+low-passed) acceleration:
+
+    a(t) = e^{-σ τ} (A cos ω_d τ + B sin ω_d τ) + D,   τ = t - t_free,
+
+then ω_n² = ω_d² + σ², ζ = σ / ω_n, k = m ω_n² and c = 2 m σ.
+
+95 % confidence intervals come from the Gauss-Newton covariance
+s² (JᵀJ)⁻¹, inflated by the long-run variance ratio of the residuals
+(Bartlett window), so that coloured residuals - filtered noise, unmodelled
+dynamics - widen the intervals instead of being taken as independent
+samples, and mapped to k and c by the delta method with Student's t quantile.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize, stats
+
+from ..errors import InputError
+from .paper import PaperResult, identify_paper
+from ..recording.preprocess import DEFAULT_CUTOFF_HZ, TireSignal, preprocess
+from ..recording import Recording
+
+__all__ = ["WaveformResult", "fit_free_decay", "identify_waveform", "long_run_variance_ratio"]
+
+
+@dataclass(frozen=True)
+class WaveformResult(PaperResult):
+    """The paper's quantities from the waveform fit, plus 95 % intervals.
+
+    Attributes (in addition to :class:`~identification.identify.paper.PaperResult`)
+    ------------------------------------------------------------------------
+    k_ci, c_ci : tuple of float
+        95 % confidence intervals of k (N/m) and c (N·s/m).
+    n_samples : int
+        Samples in the fitted window.
+    window_s : tuple of float
+        Start and end of the fitted window, s.
+    variance_inflation : float
+        Long-run variance ratio applied to the covariance (1 for white residuals).
+    """
+
+    k_ci: tuple[float, float] = (math.nan, math.nan)
+    c_ci: tuple[float, float] = (math.nan, math.nan)
+    n_samples: int = 0
+    window_s: tuple[float, float] = (math.nan, math.nan)
+    variance_inflation: float = 1.0
+
+    def to_json(self) -> dict:
+        doc = super().to_json()
+        doc["k_ci"] = [float(v) for v in self.k_ci]
+        doc["c_ci"] = [float(v) for v in self.c_ci]
+        return doc
+
+
+def long_run_variance_ratio(residual, max_lag: int | None = None) -> float:
+    """Σ ρ_k weighted by a Bartlett window: the variance factor of a mean of correlated samples.
+
+    Returns 1 for white residuals and grows with their correlation length.
+    """
+    r = np.asarray(residual, dtype=float)
+    r = r - r.mean()
+    n = r.size
+    max_lag = max_lag or int(min(n - 1, max(10, 4 * n ** (1 / 3))))
+    spec = np.fft.rfft(r, 2 * n)
+    acov = np.fft.irfft(spec * np.conj(spec))[: max_lag + 1] / n
+    if acov[0] <= 0:
+        return 1.0
+    rho = acov / acov[0]
+    weights = 1 - np.arange(1, max_lag + 1) / (max_lag + 1)
+    return float(max(1.0, 1 + 2 * np.sum(weights * rho[1:])))
+
+
+def _model(p, tau):
+    sigma, wd, A, B, D = p
+    e = np.exp(-sigma * tau)
+    c, s = np.cos(wd * tau), np.sin(wd * tau)
+    return e * (A * c + B * s) + D
+
+
+def _jacobian(p, tau):
+    sigma, wd, A, B, _ = p
+    e = np.exp(-sigma * tau)
+    c, s = np.cos(wd * tau), np.sin(wd * tau)
+    osc = e * (A * c + B * s)
+    return np.column_stack([-tau * osc, tau * e * (-A * s + B * c), e * c, e * s, np.ones_like(tau)])
+
+
+def fit_free_decay(time_s, accel_m_s2, *, sigma0: float, omega_d0: float):
+    """Least-squares fit of a damped sinusoid plus offset.
+
+    Parameters
+    ----------
+    time_s, accel_m_s2 : ndarray
+        The window to fit (τ is counted from its first sample).
+    sigma0, omega_d0 : float
+        Starting decay rate (1/s) and damped angular frequency (rad/s).
+
+    Returns
+    -------
+    params : ndarray
+        (σ 1/s, ω_d rad/s, A, B, D m/s²).
+    cov : ndarray (5, 5)
+        Covariance of the parameters, inflated for residual correlation.
+    r2 : float
+        Coefficient of determination of the fit.
+    inflation : float
+    """
+    t = np.asarray(time_s, dtype=float)
+    y = np.asarray(accel_m_s2, dtype=float)
+    tau = t - t[0]
+    basis = _jacobian(np.array([sigma0, omega_d0, 0.0, 0.0, 0.0]), tau)[:, 2:]
+    lin, *_ = np.linalg.lstsq(basis * 1.0, y, rcond=None)
+    p0 = np.array([sigma0, omega_d0, *lin])
+    sol = optimize.least_squares(lambda p: _model(p, tau) - y, p0, jac=lambda p: _jacobian(p, tau),
+                                 method="lm", x_scale="jac")
+    resid = sol.fun
+    n, npar = y.size, p0.size
+    s2 = float(resid @ resid) / max(1, n - npar)
+    J = sol.jac
+    inflation = long_run_variance_ratio(resid)
+    cov = np.linalg.pinv(J.T @ J) * s2 * inflation
+    ss_tot = float(np.sum((y - y.mean()) ** 2))
+    r2 = 1 - float(resid @ resid) / ss_tot if ss_tot > 0 else 1.0
+    return sol.x, cov, r2, inflation
+
+
+def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: dict | None = None) -> WaveformResult:
+    """Identify k and c of one tire from the waveform of its free decay.
+
+    Parameters
+    ----------
+    sig : TireSignal
+        A preprocessed channel (its free-vibration window and peaks seed the fit).
+    mass_kg : float
+        Corner mass m = W / g, kg.
+    source : str, optional
+        Named in error messages.
+    window : dict, optional
+        The window of a long recording the signal comes from (see :class:`PaperResult`).
+    """
+    t = sig.time_s
+    if sig.peak_times_s.size == 0:
+        raise InputError(source, f"channel {sig.tire}: no free-vibration peak to start a waveform fit from")
+    sel = (t >= sig.peak_times_s[0]) & (t <= sig.window_end_s)
+    if sel.sum() < 20:
+        raise InputError(source, f"channel {sig.tire}: free-decay window too short for a waveform fit")
+    sigma0, wd0 = _seeds(sig, mass_kg, source)
+    try:
+        params, cov, r2, inflation = fit_free_decay(t[sel], sig.raw_m_s2[sel], sigma0=sigma0, omega_d0=wd0)
+    except np.linalg.LinAlgError:  # e.g. accelerations so large that the sums of squares overflow
+        raise InputError(source, f"channel {sig.tire}: the waveform fit did not converge") from None
+    sigma, wd = float(params[0]), abs(float(params[1]))
+    if not (sigma > 0 and wd > 0 and np.all(np.isfinite(cov))):
+        raise InputError(source, f"channel {sig.tire}: the waveform fit found no decaying oscillation "
+                                 f"(decay rate {sigma:.3g} 1/s)")
+    wn2 = wd * wd + sigma * sigma
+    k, c = mass_kg * wn2, 2 * mass_kg * sigma
+    grad_k = np.array([2 * mass_kg * sigma, 2 * mass_kg * wd])
+    grad_c = np.array([2 * mass_kg, 0.0])
+    sub = cov[:2, :2]
+    q = float(stats.t.ppf(0.975, max(1, sel.sum() - params.size)))
+    hk = q * math.sqrt(max(0.0, float(grad_k @ sub @ grad_k)))
+    hc = q * math.sqrt(max(0.0, float(grad_c @ sub @ grad_c)))
+    if not all(math.isfinite(v) for v in (k, c, hk, hc, r2)):
+        raise InputError(source, f"channel {sig.tire}: the waveform fit gave no finite stiffness and damping "
+                                 f"(k {k:.3g} N/m, c {c:.3g} N*s/m)")
+    period = 2 * math.pi / wd
+    return WaveformResult(
+        tire=sig.tire, k=k, c=c, T=period, delta=sigma * period, zeta=sigma / math.sqrt(wn2),
+        omega_n=math.sqrt(wn2), r2=r2, n_peaks=int(sig.peak_times_s.size), mass=mass_kg, decay_rate=-sigma,
+        k_ci=(k - hk, k + hk), c_ci=(c - hc, c + hc), n_samples=int(sel.sum()),
+        window_s=(float(t[sel][0]), float(t[sel][-1])), variance_inflation=inflation, window=window)
+
+
+def _seeds(sig: TireSignal, mass_kg: float, source) -> tuple[float, float]:
+    """Starting decay rate (1/s) and damped frequency (rad/s): the paper's values where its rules are met;
+    else the spectral peak and the decrement of the first two peaks (or a damping ratio of 0.1)."""
+    try:
+        paper = identify_paper(sig, mass_kg, source=source)
+        return -paper.decay_rate, 2 * math.pi / paper.T
+    except InputError:
+        wd0 = 2 * math.pi * sig.dominant_hz
+        a, t = sig.peak_values_m_s2, sig.peak_times_s
+        if a.size >= 2 and 0 < a[1] < a[0]:
+            return math.log(a[0] / a[1]) / float(t[1] - t[0]), wd0
+        return 0.1 * wd0, wd0
+
+
+def identify_waveform_recording(rec: Recording, tires=None, *,
+                                cutoff_hz: float = DEFAULT_CUTOFF_HZ) -> dict[str, WaveformResult]:
+    """Preprocess a recording and fit every requested tire's free decay.
+
+    A long recording is analysed on its impact window, as by :func:`identification.identify.paper.identify`.
+    The fit needs one free-vibration peak above the noise, not the paper's three.
+    """
+    from ..recording.window import focus, window_json
+
+    rec = focus(rec, cutoff_hz=cutoff_hz)
+    signals = preprocess(rec, tires, cutoff_hz=cutoff_hz, min_peaks=1)
+    window = window_json(rec)
+    return {name: identify_waveform(sig, rec.mass_kg(name), source=rec.source, window=window)
+            for name, sig in signals.items()}
