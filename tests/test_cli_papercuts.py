@@ -19,6 +19,7 @@ from types import SimpleNamespace
 import pytest
 
 from identification.cli import command_line as cli
+from identification.cli.identify import tire_list
 from identification.cli.util import OutputFolders, check_output, choose_tire, make_folders
 from identification.errors import InputError
 
@@ -302,9 +303,9 @@ def test_choose_tire_any_case():
     assert choose_tire(rec, "fl") == "FL" and choose_tire(rec, " Rr ") == "RR"
     with pytest.raises(InputError, match="tire FR is not in the recording"):
         choose_tire(rec, "fr")
-    assert cli._tire_list(["fl,Rr", "FL"]) == ["FL", "RR"]
+    assert tire_list(["fl,Rr", "FL"]) == ["FL", "RR"]
     with pytest.raises(InputError, match="unknown tire 'XX'"):
-        cli._tire_list(["xx"])
+        tire_list(["xx"])
 
 
 # ----------------------------------------------------------------------------- 6. defaults in --help

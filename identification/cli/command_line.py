@@ -19,86 +19,26 @@ import os
 import sys
 
 from .. import __version__
-from .util import OutputFolders, Parser, add_example_option, read_recording_arg
+from .util import OutputFolders, Parser, read_recording_arg
 from ..errors import InputError
-from .._files import json_text
 
 __all__ = ["main", "build_parser", "EXIT_CLOSED_PIPE"]
 
 #: Modules that add a sub-command: each has ``add_parser(subparsers)``, which
 #: registers the command with ``set_defaults(func=...)``; ``func(args)``
 #: returns the exit status and raises InputError for user errors.
-_COMMAND_MODULES: list[str] = [".rig", ".export", ".simulate", ".diagnose", ".report", ".comfort", ".ride",
+_COMMAND_MODULES: list[str] = [".identify", ".rig", ".export", ".simulate", ".diagnose", ".report", ".comfort", ".ride",
                                ".static", ".ssp"]
 #: The module of each command: a command line naming one of these loads only its module (the others may
 #: import scipy, numba or matplotlib, seconds of start-up an ``export`` does not need).
-_COMMAND_MODULE_OF: dict[str, str] = {"rig": ".rig", "export": ".export", "simulate": ".simulate",
+_COMMAND_MODULE_OF: dict[str, str] = {"identify": ".identify", "rig": ".rig", "export": ".export", "simulate": ".simulate",
                                       "diagnose": ".diagnose", "demo": ".report", "report": ".report",
                                       "comfort": ".comfort", "ride": ".ride", "static": ".static", "ssp": ".ssp"}
-
-
-def _tire_list(values: list[str] | None) -> list[str] | None:
-    """The tires of ``--tire`` (names in any letter case, separated by blanks or commas), or None for all."""
-    from .util import normalize_tire
-    from ..recording import TIRES
-
-    if not values:
-        return None
-    out: list[str] = []
-    for item in values:
-        for name in map(normalize_tire, item.replace(",", " ").split()):
-            if name not in TIRES:
-                raise InputError("--tire", f"unknown tire {name!r} (allowed: {', '.join(TIRES)})")
-            if name not in out:
-                out.append(name)
-    if not out:
-        raise InputError("--tire", "no tire given (FL, FR, RL or RR)")
-    return out
 
 
 #: The recording of a command (positional REC.csv or ``--example``); kept under this name for the commands
 #: that import it from here.
 _recording_arg = read_recording_arg
-
-
-def format_table(rec, results) -> str:
-    """A Table-4-style text table (SI values shown in the paper's units)."""
-    head = (f"{'Tire':<5}{'T/s':>7}{'zeta':>7}{'delta':>7}{'wn/rad/s':>10}{'K/kN/m':>10}"
-            f"{'C/kNs/m':>9}{'R2':>6}{'peaks':>6}{'m/kg':>8}")
-    lines = [f"Recording {rec.source}: {rec.speed_kmh:.4g} km/h, {rec.sample_rate_hz:.6g} Hz, "
-             f"cleat {rec.cleat_height_m * 1e3:.4g} x {rec.cleat_width_m * 1e3:.4g} mm", head, "-" * len(head)]
-    for name, r in results.items():
-        lines.append(f"{name:<5}{r.T:>7.3f}{r.zeta:>7.3f}{r.delta:>7.3f}{r.omega_n:>10.2f}{r.k / 1e3:>10.2f}"
-                     f"{r.c / 1e3:>9.2f}{r.r2:>6.2f}{r.n_peaks:>6d}{r.mass:>8.1f}")
-    cis = [(n, r) for n, r in results.items() if hasattr(r, "k_ci")]
-    if cis:
-        lines.append("95 % confidence intervals (waveform fit):")
-        for name, r in cis:
-            lines.append(f"{name:<5}K {r.k_ci[0] / 1e3:.2f} .. {r.k_ci[1] / 1e3:.2f} kN/m   "
-                         f"C {r.c_ci[0] / 1e3:.3f} .. {r.c_ci[1] / 1e3:.3f} kNs/m")
-    return "\n".join(lines)
-
-
-def cmd_identify(args) -> int:
-    from ..identify.graceful import Refusal, identify_channels
-
-    rec = _recording_arg(args)
-    results = identify_channels(rec, _tire_list(args.tire), cutoff_hz=args.cutoff_hz, method=args.method)
-    refused = [r for r in results.values() if isinstance(r, Refusal)]
-    identified = {name: r for name, r in results.items() if not isinstance(r, Refusal)}
-    if refused and not identified and all(r.fallback is None for r in refused):
-        raise InputError(rec.source, f"channel {refused[0].tire}: {refused[0].rule}")
-    if args.json:
-        for r in refused:
-            print(f"cleatfmu: warning: {rec.source}: {r.sentence()}", file=sys.stderr)
-        doc = {"recording": rec.source, "speed_kmh": rec.speed_kmh,
-               "tires": {name: r.to_json() for name, r in results.items()}}
-        print(json_text(doc))
-    else:
-        print(format_table(rec, identified))
-        for r in refused:
-            print(r.sentence())
-    return 0
 
 
 def _command_of(argv) -> str | None:
@@ -107,14 +47,12 @@ def _command_of(argv) -> str | None:
     return argv[0] if argv and not str(argv[0]).startswith("-") else None
 
 
-def _parts(command: str | None) -> tuple[bool, list[str]]:
-    """Whether the parser needs ``identify``, and the command modules it needs, for `command`."""
-    if command == "identify":
-        return True, []
+def _parts(command: str | None) -> list[str]:
+    """The command modules the parser needs for `command`."""
     module = _COMMAND_MODULE_OF.get(command)
     if module is not None and module in _COMMAND_MODULES:
-        return False, [module]
-    return True, list(_COMMAND_MODULES)
+        return [module]
+    return list(_COMMAND_MODULES)
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -132,37 +70,14 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     argparse.ArgumentParser
         The parser.
     """
-    with_identify, modules = _parts(command)
+    modules = _parts(command)
     parser = Parser(prog="cleatfmu", description="Tire stiffness and damping from cleat tests, "
                     "exported as FMI 2.0 and 3.0 co-simulation FMUs.")
     parser.add_argument("--version", action="version", version=f"cleatfmu {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    if with_identify:
-        _add_identify(sub)
     for module in modules:
         importlib.import_module(module, __package__).add_parser(sub)
     return parser
-
-
-def _add_identify(sub) -> None:
-    """Register ``cleatfmu identify``."""
-    p = sub.add_parser("identify", help="identify tire stiffness k and damping c from a cleat recording",
-                       description="Identify k and c of each tire by the cleat-test paper's method "
-                                   "(logarithmic decrement for k, exponential fit through the first peak for c).")
-    p.add_argument("recording", nargs="?", metavar="REC.csv",
-                   help="recording NAME.csv (sidecar NAME.json beside it)")
-    add_example_option(p)
-    p.add_argument("--tire", action="extend", nargs="+", metavar="TIRE",
-                   help="tire channel(s) to identify (FL FR RL RR, any letter case; default: all in the "
-                        "recording)")
-    p.add_argument("--method", choices=("paper", "waveform"), default="paper",
-                   help="paper: log decrement (k) and exponential fit through the first peak (c); "
-                        "waveform: least-squares damped-sinusoid fit of the free decay, with 95%% "
-                        "confidence intervals (default: %(default)s)")
-    p.add_argument("--json", action="store_true", help="print JSON (SI units) instead of a table")
-    p.add_argument("--cutoff-hz", type=float, default=None,
-                   help="low-pass cut-off, Hz (default: 100, or 0.4 x the sampling rate when lower; zero-phase 5th-order Butterworth)")
-    p.set_defaults(func=cmd_identify)
 
 
 #: Exit status when stdout is closed before the output is written (``cleatfmu ... | head -1``): 128 + SIGPIPE,
