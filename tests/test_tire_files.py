@@ -165,7 +165,7 @@ def test_the_chrono_tire_json_changes_in_its_two_vertical_values_only(cli, param
      "[VERTICAL]\nVERTICAL_STIFFNESS = 1\nVERTICAL_DAMPING = 2\nVERTICAL_DAMPING = 3\n", "given twice"),
     (("--format", "tir", "--base", "{missing}"), None, "no such file"),
     (("--format", "chrono-json", "--base", "{base}"), '{"Vertical Stiffness": 1}', '0 numeric "Vertical Damping"'),
-    (("--format", "chrono-json", "--base", "{base}"), "[" * 20000 + "]" * 20000, "is not JSON"),
+    (("--format", "chrono-json", "--base", "{base}"), "[" * 20000 + "]" * 20000, "malformed JSON"),
     (("--format", "tir", "-o", "{tmp}/x.fmu"), None, "must end with .tir"),
 ])
 def test_bad_tire_file_exports_fail_in_one_line_and_write_nothing(cli, params, tmp_path, args, base, needle):

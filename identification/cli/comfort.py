@@ -16,6 +16,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from .._files import json_text
+from ..recording.csv_reader import check_uniform_time
 
 __all__ = ["add_parser", "run", "read_acceleration_csv", "DEFAULT_EXPOSURE_H"]
 
@@ -23,8 +24,6 @@ __all__ = ["add_parser", "run", "read_acceleration_csv", "DEFAULT_EXPOSURE_H"]
 DEFAULT_EXPOSURE_H = 8.0
 #: Shortest accepted record, s (the running RMS's integration time).
 MIN_DURATION_S = 1.0
-#: Largest accepted deviation of a time step from the nominal step (relative).
-JITTER_TOLERANCE = 0.01
 _WEIGHTINGS = ("Wk", "Wd", "Wf")
 
 
@@ -125,21 +124,11 @@ def read_acceleration_csv(path) -> tuple[list[str], float, dict]:
         row, col = np.argwhere(~np.isfinite(data))[0]
         raise InputError(path, f"line {numbered[row][0]}, column {header[col]}: non-finite value {data[row, col]}")
     t = data[:, 0]
-    dt = np.diff(t)
-    if np.any(dt <= 0):
-        i = int(np.flatnonzero(dt <= 0)[0]) + 1
-        raise InputError(path, f"time is not strictly increasing at line {numbered[i][0]} "
-                               f"(t = {t[i]:g} s after {t[i - 1]:g} s)")
     duration = float(t[-1] - t[0])
     if duration < MIN_DURATION_S:
         raise InputError(path, f"record too short: {duration:g} s (at least {MIN_DURATION_S:g} s needed for the "
                                f"1 s running RMS)")
-    nominal = duration / (len(t) - 1)
-    worst = int(np.argmax(np.abs(dt - nominal)))
-    if abs(dt[worst] - nominal) > JITTER_TOLERANCE * nominal:
-        raise InputError(path, f"time is not uniformly sampled: step {dt[worst]:.6g} s at line "
-                               f"{numbered[worst + 1][0]} vs nominal {nominal:.6g} s "
-                               f"(tolerance {JITTER_TOLERANCE:.0%})")
+    nominal = check_uniform_time(path, t, line_of=lambda i: numbered[i][0])
     names = header[1:]
     return names, 1.0 / nominal, {name: data[:, j + 1] for j, name in enumerate(names)}
 

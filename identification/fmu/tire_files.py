@@ -17,12 +17,11 @@ SI units throughout (N/m, N s/m, N, m).
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from pathlib import Path
 
-from .._files import OutputFolders, atomic_write_bytes, check_folder, make_folders, read_input_bytes
+from .._files import OutputFolders, atomic_write_bytes, check_folder, make_folders, parse_json, read_input_bytes
 from ..errors import InputError
 from .export import (_STANDARD_GRAVITY, DEFAULT_UNLOADED_RADIUS_M, _method, _number as _is_number,
                      _recording_name, read_identified)
@@ -135,11 +134,7 @@ def tir_values(text: str) -> dict[str, dict[str, str]]:
 def patch_chrono_json(base: str, *, k: float, c: float, source) -> str:
     """A Chrono tire JSON with its ``"Vertical Stiffness"`` = k and ``"Vertical Damping"`` = c (each once in
     the file); every other character as it was."""
-    try:
-        json.loads(base)
-    except (json.JSONDecodeError, RecursionError) as exc:
-        raise InputError(source, f"is not JSON: {exc.msg if hasattr(exc, 'msg') else 'nested too deeply'}") \
-            from None
+    parse_json(base, source)
     out = base
     for key, value in (("Vertical Stiffness", k), ("Vertical Damping", c)):
         pattern = re.compile(rf'("{key}"\s*:\s*)({_NUMBER})')

@@ -174,7 +174,7 @@ def read_compression(path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         A missing or unreadable file, missing or ambiguous columns, a short row, a
         non-numeric or non-finite cell.
     """
-    from .._files import read_input_text
+    from .._files import parse_number, read_input_text
 
     path = Path(path)
     text = read_input_text(path, encoding="utf-8-sig")
@@ -207,7 +207,7 @@ def read_compression(path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             raise InputError(path, f"line {lineno}: expected {len(header)} cells, found {len(cells)}")
         for out, i in ((deformation, i_d), (force, i_f)):
             try:
-                value = float(cells[i])
+                value = parse_number(cells[i])
             except ValueError:
                 raise InputError(path, f"line {lineno}, column {header[i]}: {cells[i].strip()!r} is not a number") \
                     from None

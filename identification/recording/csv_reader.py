@@ -12,12 +12,18 @@ from pathlib import Path
 
 import numpy as np
 
+from .._files import parse_number
 from ..errors import InputError
 
-__all__ = ["JITTER_TOLERANCE", "MIN_SAMPLES", "MIN_DURATION_S", "CHUNK_LINES", "read_csv", "check_time"]
+__all__ = ["JITTER_TOLERANCE", "MIN_SAMPLES", "MIN_DURATION_S", "CHUNK_LINES", "read_csv", "check_time",
+           "check_uniform_time", "time_resolution"]
 
-#: Largest accepted deviation of a time step from the nominal step (relative).
+#: Largest accepted deviation of a time from the uniform grid t[0] + i h, h = (t[-1] - t[0]) / (n - 1), as a
+#: fraction of h (or one unit of the time column's last written decimal, if that is more: 1/2048 s to 5 decimals).
 JITTER_TOLERANCE = 0.01
+#: Largest deviation accepted as the rounding of times written with too few decimals for their step, as a
+#: fraction of the step (fewer decimals than that are refused: the times no longer say when samples were taken).
+ROUNDING_LIMIT = 0.05
 #: Shortest accepted record.
 MIN_SAMPLES = 100
 MIN_DURATION_S = 1.0
@@ -139,11 +145,19 @@ def _locate_bad_cell(path: Path, header: list[str], numbered: list[tuple[int, st
             raise InputError(path, f"line {lineno}: expected {len(header)} cells, found {len(cells)}")
         for name, cell in zip(header, cells):
             try:
-                if "_" in cell or not cell.isascii():  # Python's float takes 1_000 and other digits, numpy's not
-                    raise ValueError
-                float(cell)
+                parse_number(cell)
             except ValueError:
                 raise InputError(path, f"line {lineno}, column {name}: {cell.strip()!r} is not a number") from None
+
+
+def time_resolution(t: np.ndarray) -> float:
+    """The resolution the time column was written with: the largest 10^-d (d = 0..9) of which every time
+    is a whole multiple (within round-off), or 0 when none is."""
+    for d in range(10):
+        scaled = t * 10.0 ** d
+        if np.all(np.abs(scaled - np.round(scaled)) <= 1e-9 * np.maximum(1.0, np.abs(scaled))):
+            return 10.0 ** -d
+    return 0.0
 
 
 def check_time(source, t: np.ndarray, line_of=None) -> None:
@@ -158,24 +172,41 @@ def check_time(source, t: np.ndarray, line_of=None) -> None:
     line_of : callable, optional
         Maps a sample index to the file's line number (messages then name lines, else samples).
     """
-    def line(i: int) -> str:
-        return f"line {line_of(i)}" if line_of else f"sample {i}"
-
     if t.ndim != 1 or len(t) < MIN_SAMPLES:
         raise InputError(source, f"record too short: {len(t)} samples (at least {MIN_SAMPLES} needed)")
     if not np.all(np.isfinite(t)):
         raise InputError(source, "time holds non-finite values")
+    if t[-1] - t[0] < MIN_DURATION_S:
+        raise InputError(source, f"record too short: {t[-1] - t[0]:g} s (at least {MIN_DURATION_S:g} s needed)")
+    check_uniform_time(source, t, line_of)
+
+
+def check_uniform_time(source, t: np.ndarray, line_of=None) -> float:
+    """Refuse a time column (finite, two samples or more) that is not strictly increasing or not uniform:
+    every time within :data:`JITTER_TOLERANCE` of a step of the uniform grid t[0] + i h.  Where h itself cannot
+    be written with the column's decimals (:func:`time_resolution`), within one unit of the last decimal if
+    that is more, up to :data:`ROUNDING_LIMIT` of a step (times rounded to half a unit, the grid through the
+    rounded end points is off the true one by up to half a unit more); returns h, s.
+    The one rule of every reader of a time column."""
+    def line(i: int) -> str:
+        return f"line {line_of(i)}" if line_of else f"sample {i}"
+
     dt = np.diff(t)
     bad = np.flatnonzero(dt <= 0)
     if bad.size:
         i = bad[0] + 1
         raise InputError(source, f"time is not strictly increasing at {line(i)} (t = {t[i]:g} s after {t[i - 1]:g} s)")
     duration = t[-1] - t[0]
-    if duration < MIN_DURATION_S:
-        raise InputError(source, f"record too short: {duration:g} s (at least {MIN_DURATION_S:g} s needed)")
     nominal = duration / (len(t) - 1)
-    dev = np.abs(dt - nominal) / nominal
+    dev = np.abs(t - (t[0] + nominal * np.arange(len(t))))
+    allowed = JITTER_TOLERANCE * nominal
+    resolution = time_resolution(t)
+    if resolution > 0 and abs(nominal / resolution - round(nominal / resolution)) > 1e-6:   # h not writable
+        allowed = max(allowed, min(resolution * (1 + 1e-6), ROUNDING_LIMIT * nominal))
     worst = int(np.argmax(dev))
-    if dev[worst] > JITTER_TOLERANCE:
-        raise InputError(source, f"time is not uniformly sampled: step {dt[worst]:.6g} s at {line(worst + 1)} "
-                                 f"vs nominal {nominal:.6g} s (tolerance {JITTER_TOLERANCE:.0%})")
+    if dev[worst] > allowed:
+        raise InputError(source, f"time is not uniformly sampled: t = {t[worst]:.9g} s at {line(worst)} is "
+                                 f"{dev[worst] / nominal:.1%} of a step off the uniform grid of step "
+                                 f"{nominal:.6g} s (tolerance {JITTER_TOLERANCE:.0%}, or the time "
+                                 f"column's last decimal)")
+    return float(nominal)

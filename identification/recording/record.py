@@ -4,8 +4,9 @@ A recording is two files with the same stem:
 
 ``NAME.csv``
     Header ``time,<channels>``.  ``time`` in s, strictly increasing and
-    uniformly sampled: every step may differ from the nominal step
-    ``(t[-1] - t[0]) / (n - 1)`` by at most 1 % (:data:`JITTER_TOLERANCE`).
+    uniformly sampled: every time may be off the uniform grid of step
+    ``h = (t[-1] - t[0]) / (n - 1)`` by at most 1 % of h (:data:`JITTER_TOLERANCE`),
+    or by one unit of the last decimal written if that is more (1/2048 s written to 5 decimals).
     Channels are any non-empty subset of ``FL, FR, RL, RR`` (front/rear,
     left/right): hub vertical acceleration in m/s², upward positive, gravity
     excluded (AC-coupled accelerometers).  At least :data:`MIN_SAMPLES`
