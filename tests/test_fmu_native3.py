@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import struct
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -154,3 +155,35 @@ def test_fmi3_fmu_under_an_awkward_path_and_byte_identical_re_export(native_fmus
     np.testing.assert_allclose(simulate_fmu(str(unzipped), output=["force_z"])["force_z"], 15000.0, rtol=1e-12)
     again = build_fmu("point_contact", tmp_path / "again.fmu", backend="native", fmi_version=3)
     assert again.read_bytes() == native_fmus3["point_contact"].read_bytes()
+
+
+def _listing(folder):
+    return sorted(p.name for p in Path(folder).iterdir())
+
+
+def test_simulate_refuses_an_fmi3_fmu_and_one_without_this_machines_binary_leaving_nothing(
+        native_fmus, native_fmus3, tmp_path, cli, monkeypatch):
+    """Before: 'Cannot find shared library …/linux64/' for an FMI 3.0 FMU, and the extracted FMU stayed in
+    $TMPDIR."""
+    import tempfile
+    import zipfile
+
+    from identification.recording import write_recording
+    from conftest import analytic_recording
+
+    rec = write_recording(analytic_recording(tires=("FL",), noise=0.01), tmp_path / "r")
+    stage = tmp_path / "tmp"
+    stage.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(stage))
+    foreign = tmp_path / "foreign.fmu"
+    with zipfile.ZipFile(native_fmus["point_contact"]) as zin, zipfile.ZipFile(foreign, "w") as zout:
+        for info in zin.infolist():
+            if not info.filename.startswith("binaries/linux64/"):
+                zout.writestr(info, zin.read(info))
+    for fmu, needle in ((native_fmus3["point_contact"], "an FMI 3.0 FMU"),
+                        (foreign, "has no binary for this machine (binaries/linux64/CleatfmuPointContact.so)")):
+        res = cli("simulate", fmu, rec, "--tire", "FL")
+        assert res.code == 2 and res.out == ""
+        lines = res.err.strip().splitlines()
+        assert len(lines) == 1 and needle in lines[0] and str(fmu) in lines[0], res.err
+        assert _listing(stage) == []

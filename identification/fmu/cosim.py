@@ -87,6 +87,9 @@ class TireFmu:
             self.md = read_model_description(str(path))
         except Exception as exc:  # fmpy raises several types for a bad archive
             raise InputError(path, f"not a readable FMU ({exc.__class__.__name__}: {exc})") from None
+        if self.md.fmiVersion != "2.0":
+            raise InputError(path, f"an FMI {self.md.fmiVersion} FMU: the co-simulation here runs FMI 2.0 FMUs "
+                                   "(export it with --fmi-version 2)")
         if self.md.coSimulation is None:
             raise InputError(path, "the FMU does not support co-simulation")
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
@@ -95,11 +98,21 @@ class TireFmu:
             raise InputError(path, f"not a cleatfmu tire FMU: missing variable(s) {', '.join(missing)}")
         self.path = path
         self.longitudinal = all(n in self.vr for n in LONGITUDINAL)
+        _check_binary(path, self.md.coSimulation.modelIdentifier)
+        self.slave = None
         self._dir = tempfile.mkdtemp(prefix="cleatfmu_fmu_")
-        extract(str(path), self._dir, include=_loaded_member)
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
-                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=instance_name)
-        self.slave.instantiate()
+        try:
+            extract(str(path), self._dir, include=_loaded_member)
+            self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
+                                   modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=instance_name)
+            self.slave.instantiate()
+        except BaseException as exc:   # nothing extracted stays behind; a library that would not load is named
+            if self.slave is not None and getattr(self.slave, "component", None) is None:
+                self.slave = None
+            shutil.rmtree(self._dir, ignore_errors=True)
+            if isinstance(exc, Exception) and not isinstance(exc, InputError):
+                raise InputError(path, f"cannot instantiate the FMU here ({exc.__class__.__name__})") from None
+            raise
         self._initialized = False
         self._start_values = dict(start_values or {})
         self.input_vrs = [self.vr[n] for n in INPUTS + (LONGITUDINAL if self.longitudinal else ())]
@@ -209,6 +222,23 @@ class _RawFmi2:
         self.exchange = (function("fmi2SetReal"), function("fmi2GetReal"), self.component,
                          (ctypes.c_uint * n)(*input_vrs), ctypes.c_size_t(n), values,
                          (ctypes.c_uint * 1)(force_vr), ctypes.c_size_t(1), (ctypes.c_double * 1)())
+
+
+def _check_binary(path: Path, model_identifier: str) -> None:
+    """Refuse an FMU without a binary for this machine (before anything is extracted)."""
+    import zipfile
+
+    from fmpy import platform, sharedLibraryExtension
+
+    member = f"binaries/{platform}/{model_identifier}{sharedLibraryExtension}"
+    try:
+        with zipfile.ZipFile(path) as archive:
+            present = member in archive.namelist()
+    except (OSError, zipfile.BadZipFile) as exc:
+        raise InputError(path, f"not a readable FMU ({exc.__class__.__name__}: {exc})") from None
+    if not present:
+        raise InputError(path, f"has no binary for this machine ({member}); a native FMU is built for every "
+                               "platform by default (cleatfmu export --platforms)")
 
 
 def _loaded_member(name: str) -> bool:
