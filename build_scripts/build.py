@@ -32,6 +32,7 @@ from pathlib import Path
 from .kinds import FmuKind, load_kind, module_source
 from .model_description import complete_model_description
 from .reproducible import GUID_PLACEHOLDER, content_guid, zip_bytes
+from identification._files import publish_path
 
 __all__ = ["BACKENDS", "build_fmu", "build_prefix", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
 
@@ -288,7 +289,7 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, dest)
+        publish_path(tmp, dest)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
@@ -333,7 +334,7 @@ def _build_native(k, dest: Path, starts, given, provenance, description, fmi_ver
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, dest)
+        publish_path(tmp, dest)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise

@@ -14,12 +14,45 @@ One folder per stage, data flowing one way (each imports only the ones above it)
 :mod:`~identification.rig` is the virtual test rig (regression tests only; the pipeline never imports it).
 """
 
+import sys as _sys
+
+import _signal   # built in: no import time before Ctrl-C is answered
+
+
+def _started_as_the_program() -> bool:
+    """The process runs ``cleatfmu`` (or ``python -m identification.cli``), not a notebook importing it."""
+    first = _sys.argv[0] if _sys.argv else ""
+    return first == "-m" or first.replace("\\", "/").rsplit("/", 1)[-1].startswith("cleatfmu")
+
+
+def _defer_interrupt(signum, frame):
+    """Ctrl-C or SIGTERM while the program's modules are still being imported: remembered, and answered by
+    the command line's ``main`` with one line and status 130 or 143, not a traceback from an import."""
+    global _interrupted
+    _interrupted = _interrupted or signum
+
+
+_interrupted = 0
+if _started_as_the_program():
+    for _signum in (_signal.SIGINT, _signal.SIGTERM):
+        if _signal.getsignal(_signum) in (_signal.default_int_handler, _signal.SIG_DFL):
+            _signal.signal(_signum, _defer_interrupt)
+
+
 __version__ = "0.1.0"
 
-from .errors import InputError  # noqa: E402
-from .recording import Recording, read_recording, write_recording  # noqa: E402
-from .recording.preprocess import preprocess  # noqa: E402
-from .identify.paper import PaperResult, identify_paper  # noqa: E402
+#: The package's API at the top, each imported when first used (``import identification.cli`` stays light:
+#: a command can be interrupted from its first milliseconds with one line and status 130).
+_API = {"InputError": ".errors", "Recording": ".recording", "read_recording": ".recording",
+        "write_recording": ".recording", "preprocess": ".recording.preprocess", "PaperResult": ".identify.paper",
+        "identify_paper": ".identify.paper"}
 
-__all__ = ["InputError", "Recording", "read_recording", "write_recording", "preprocess",
-           "PaperResult", "identify_paper", "__version__"]
+__all__ = [*_API, "__version__"]
+
+
+def __getattr__(name):
+    if name in _API:
+        import importlib
+
+        return getattr(importlib.import_module(_API[name], __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -15,7 +15,7 @@ from .errors import InputError
 __all__ = ["atomic_write_texts", "atomic_write_bytes", "publish_files", "json_text", "finite_or_none",
            "read_input_bytes", "read_input_text", "read_json_file", "parse_json", "parse_number",
            "INPUT_LIMIT_BYTES",
-           "OutputFolders", "check_folder", "make_folders", "missing_folders"]
+           "OutputFolders", "check_folder", "make_folders", "missing_folders", "publish_path"]
 
 #: Largest input document (JSON, CSV table, property file) read whole, bytes.
 INPUT_LIMIT_BYTES = 256 << 20
@@ -61,9 +61,9 @@ def atomic_write_bytes(files: Mapping[Path, bytes]) -> None:
             with os.fdopen(fd, "wb") as fh:
                 fh.write(data)
             os.chmod(name, 0o666 & ~umask)
-        for path, name in tmp.items():
-            os.replace(name, path)
-        tmp.clear()
+        for path, name in list(tmp.items()):
+            publish_path(name, path)
+            del tmp[path]
     finally:
         for name in tmp.values():
             if os.path.exists(name):
@@ -178,16 +178,20 @@ def _blocks() -> list:
 
 
 class OutputFolders:
-    """A block whose newly created output folders are removed again if it fails.
+    """A block whose output goes again if it fails: the folders it created, and the files it published.
 
-    Folders made by :func:`make_folders` (or :func:`check_output`) inside the
-    block are recorded.  When the block raises, or :meth:`remove` is called,
-    they are removed, deepest first, where empty.  When it succeeds inside an
-    enclosing block, that block takes them over.
+    Folders made by :func:`make_folders` (or :func:`check_output`) and files put in place by
+    :func:`publish_path` (every writer here: :func:`atomic_write_bytes`, the FMU builds) inside the block are
+    recorded.  When the block raises, or :meth:`remove` is called, each file published over an older one
+    gets the older one back, each new file is removed, and then the folders, deepest first, where empty.
+    When it succeeds inside an enclosing block, that block takes them over; at the outermost block the
+    older files' copies are dropped.  A command is such a block up to the moment its output has reached
+    stdout: a result that cannot be printed (a full disk behind ``>``) leaves the files as they were.
     """
 
     def __init__(self):
         self.created: list[Path] = []
+        self.published: list[tuple[Path, Path | None]] = []      # (file, the older file's copy or None)
 
     def __enter__(self) -> "OutputFolders":
         _blocks().append(self)
@@ -200,16 +204,72 @@ class OutputFolders:
             self.remove()
         elif blocks:
             blocks[-1].created.extend(self.created)
-            self.created = []
+            blocks[-1].published.extend(self.published)
+            self.created, self.published = [], []
+        else:
+            self.keep()
+
+    def keep(self) -> None:
+        """Keep the published files: drop the older files' copies."""
+        for _, backup in self.published:
+            if backup is not None:
+                _unlink_quietly(backup)
+        self.published = []
 
     def remove(self) -> None:
-        """Remove the recorded folders that are empty (the deepest first); forget all of them."""
+        """Undo the block's output: older files back, new files removed, then the recorded folders that are
+        empty (the deepest first); forget all of them."""
+        for path, backup in reversed(self.published):
+            try:
+                if backup is not None:
+                    os.replace(backup, path)
+                else:
+                    os.unlink(path)
+            except OSError:
+                pass
+        self.published = []
         for folder in reversed(self.created):
             try:
                 folder.rmdir()
             except OSError:
                 pass
         self.created = []
+
+
+def _unlink_quietly(path) -> None:
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
+
+
+def publish_path(finished, path) -> None:
+    """Put the finished file `finished` (a temporary name in `path`'s folder) in place as `path`
+    (``os.replace``).  Inside an :class:`OutputFolders` block the file is recorded, and an older `path` is
+    kept as a hidden hard link (or copy) beside it until the block ends, so that a failed block can put it
+    back."""
+    path = Path(path)
+    blocks = _blocks()
+    backup = None
+    if blocks and path.is_file():
+        fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".previous")
+        os.close(fd)
+        os.unlink(name)
+        try:
+            os.link(path, name)
+        except OSError:
+            import shutil
+
+            shutil.copy2(path, name)
+        backup = Path(name)
+    try:
+        os.replace(finished, path)
+    except BaseException:
+        if backup is not None:
+            _unlink_quietly(backup)
+        raise
+    if blocks:
+        blocks[-1].published.append((path, backup))
 
 
 def missing_folders(folder) -> list[Path]:

@@ -7,6 +7,7 @@ A worker started by :func:`process_pool`
   core; seen: 5 ms -> 0.5 s);
 * ignores SIGINT: Ctrl-C reaches the whole foreground process group, and the
   parent alone decides (it stops the pool, :func:`stop_pool`, and exits 130);
+  SIGTERM ends it (the default action, not the command's handler it was forked with);
 * on Linux, is killed when its parent dies, SIGKILL included
   (``PR_SET_PDEATHSIG``), so no worker outlives a killed run.
 """
@@ -25,6 +26,7 @@ _PR_SET_PDEATHSIG = 1
 def worker_init(parent_pid: int | None = None) -> None:
     """Initializer of a pool's worker process (see the module docstring)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)   # the parent's handler (raise where the command is) is not ours
     if sys.platform.startswith("linux"):
         import ctypes
 

@@ -441,3 +441,33 @@ def test_stdout_that_cannot_take_the_result_is_an_error_not_a_traceback_or_a_sil
     assert done.returncode == 2, (done.returncode, done.stderr)
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"cleatfmu: error: {needle}"), done.stderr
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="no /dev/full here")
+@pytest.mark.parametrize("args,made", [(["export", "{params}", "--tire", "FL", "-o", "{out}/kept.fmu",
+                                         "--platforms", "linux64"], "kept.fmu"),
+                                        (["export", "{params}", "--tire", "FL", "--format", "tir", "-o",
+                                          "{out}/kept.tir"], "kept.tir"),
+                                        (["rig", "-o", "{out}/run.csv"], "run.csv")])
+def test_a_result_that_cannot_reach_stdout_leaves_the_files_as_they_were(tmp_path, args, made):
+    """``export … -o kept.fmu > /dev/full`` failed with status 2 but had written kept.fmu; over an older file it
+    now leaves the older file, and with none, nothing."""
+    params = tmp_path / "p.json"
+    params.write_text(json.dumps({"recording": "r.csv", "speed_kmh": 7.0,
+                                  "tires": {"FL": {"k": 550e3, "c": 2500.0, "mass": 1716.2}}}))
+    out = tmp_path / "out"
+    out.mkdir()
+    argv = [a.format(params=params, out=out) for a in args]
+    cmd = " ".join(shlex.quote(a) for a in [sys.executable, "-m", "identification.cli", *argv])
+    root = Path(__file__).resolve().parents[1]
+    for older in (None, b"the older file\n"):
+        if older is not None:
+            (out / made).write_bytes(older)
+        done = subprocess.run(["bash", "-c", cmd + " > /dev/full"], capture_output=True, text=True, timeout=300,
+                              cwd=root)
+        assert done.returncode == 2, done.stderr
+        assert done.stderr.strip().splitlines()[-1].startswith("cleatfmu: error: stdout: cannot write"), done.stderr
+        if older is None:
+            assert sorted(p.name for p in out.iterdir()) == []
+        else:
+            assert sorted(p.name for p in out.iterdir()) == [made] and (out / made).read_bytes() == older

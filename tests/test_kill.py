@@ -7,6 +7,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from identification.rig import run_rig, write_run
@@ -102,3 +103,106 @@ def test_sigint_stops_a_report_within_2_s_with_exit_130_and_no_traceback(day, tm
     assert "Traceback" not in err and err.strip().count("\n") == 0, err
     time.sleep(0.2)
     assert not [w for w in workers if _alive(w)]
+
+
+def _cli(args, tmpdir: Path, **kw):
+    env = dict(os.environ, TMPDIR=str(tmpdir))
+    return subprocess.Popen([sys.executable, "-m", "identification.cli", *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env, **kw)
+
+
+@pytest.fixture(scope="module")
+def tractor(tmp_path_factory):
+    """A four-channel rig recording: its diagnosis runs for several seconds and writes FMUs through TMPDIR."""
+    folder = tmp_path_factory.mktemp("tractor")
+    write_run(run_rig(("axle_coupling",), seed=4), folder / "rec")
+    return folder / "rec.csv"
+
+
+@pytest.mark.parametrize("after_s", [1.5, 4.0])
+def test_sigterm_to_diagnose_leaves_nothing_in_tmpdir_and_no_output(tractor, tmp_path, after_s):
+    """Before: SIGTERM had no handler; the FMUs' temporary folder stayed in $TMPDIR."""
+    tmpdir = tmp_path / "tmp"
+    tmpdir.mkdir()
+    out = tmp_path / "fmus"
+    proc = _cli(["diagnose", tractor, "--fmu-dir", out, "--json"], tmpdir)
+    time.sleep(after_s)
+    if proc.poll() is not None:
+        pytest.fail(f"the diagnosis ended before {after_s} s: {proc.communicate()}")
+    kids = _children(proc.pid)
+    proc.send_signal(signal.SIGTERM)
+    try:
+        stdout, stderr = proc.communicate(timeout=20)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        pytest.fail("SIGTERM did not stop the diagnosis within 20 s")
+    assert proc.returncode == 143, (proc.returncode, stderr)
+    assert stderr.strip().splitlines()[-1:] == ["cleatfmu: terminated"] and "Traceback" not in stderr, stderr
+    assert stdout == ""
+    assert not out.exists()
+    assert sorted(p.name for p in tmpdir.iterdir()) == []
+    time.sleep(0.2)
+    assert not [k for k in kids if _alive(k)]
+
+
+def test_sigterm_or_sigint_during_export_over_an_older_fmu_leaves_the_older_or_the_new_one(tmp_path):
+    """Interrupted at ten times across an export that replaces an FMU: the folder holds the older FMU or the
+    complete new one, nothing else."""
+    import json
+    import zipfile
+
+    params = tmp_path / "p.json"
+    entry = {"k": 550e3, "c": 2500.0, "mass": 1716.2}
+    params.write_text(json.dumps({"recording": "r.csv", "speed_kmh": 7.0, "tires": {"FL": entry,
+                                                                                    "FR": {**entry, "k": 4e5}}}))
+    folder = tmp_path / "out"
+    folder.mkdir()
+    fmu = folder / "tire.fmu"
+    tmpdir = tmp_path / "tmp"
+    tmpdir.mkdir()
+    first = _cli(["export", params, "--tire", "FL", "-o", fmu, "--platforms", "linux64"], tmpdir)
+    assert first.wait(timeout=120) == 0, first.communicate()
+    older = fmu.read_bytes()
+    outcomes = set()
+    for i, after_s in enumerate(np.linspace(0.3, 1.5, 10)):
+        proc = _cli(["export", params, "--tire", "FR", "-o", fmu, "--platforms", "linux64"], tmpdir)
+        time.sleep(after_s)
+        proc.send_signal(signal.SIGTERM if i % 2 else signal.SIGINT)
+        _, stderr = proc.communicate(timeout=60)
+        assert "Traceback" not in stderr or "identification" not in stderr, stderr   # (see the test below)
+        assert sorted(p.name for p in folder.iterdir()) == ["tire.fmu"]
+        data = fmu.read_bytes()
+        if data == older:
+            outcomes.add("older")
+        else:
+            with zipfile.ZipFile(fmu) as z:
+                assert b'name="stiffness"' in z.read("modelDescription.xml")
+                assert b"400000" in z.read("modelDescription.xml")
+            outcomes.add("new")
+            fmu.write_bytes(older)
+        # 0: done first; 130/143: answered; -2/-15: the signal came in the interpreter's own start-up
+        assert proc.returncode in (0, 130, 143, -signal.SIGINT, -signal.SIGTERM), (proc.returncode, stderr)
+    assert "older" in outcomes
+    assert sorted(p.name for p in tmpdir.iterdir()) == []
+
+
+def test_ctrl_c_while_the_program_is_still_importing_ends_with_130_and_no_traceback(tmp_path):
+    """Before: a traceback from the middle of an import, exit 1.  (A SIGINT in the interpreter's own start-up,
+    before the program's first line runs, is Python's: a traceback of runpy or the signal, without a frame of
+    the package.)"""
+    answered = 0
+    for after_s in (0.04, 0.06, 0.08, 0.1, 0.15, 0.3):
+        proc = _cli(["identify", "--example", "7kmh"], tmp_path)
+        time.sleep(after_s)
+        proc.send_signal(signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=60)
+        if "Traceback" in stderr:       # the interpreter's own start-up, before the program's first line
+            assert "identification" not in stderr, (after_s, stderr)
+            continue
+        if proc.returncode == 0:        # finished first (a fast machine): nothing to check
+            continue
+        assert proc.returncode in (130, -signal.SIGINT), (after_s, proc.returncode, stderr)
+        if proc.returncode == 130:
+            assert stderr == "cleatfmu: interrupted\n" and stdout == "", stderr
+            answered += 1
+    assert answered >= 3

@@ -16,13 +16,14 @@ import errno
 import importlib
 import io
 import os
+import signal
 import sys
 
 from .. import __version__
 from .util import OutputFolders, Parser, read_recording_arg
 from ..errors import InputError
 
-__all__ = ["main", "build_parser", "EXIT_CLOSED_PIPE"]
+__all__ = ["main", "build_parser", "EXIT_CLOSED_PIPE", "EXIT_TERMINATED", "Terminated"]
 
 #: Modules that add a sub-command: each has ``add_parser(subparsers)``, which
 #: registers the command with ``set_defaults(func=...)``; ``func(args)``
@@ -131,6 +132,46 @@ def _silence_stdout() -> None:
         os.close(devnull)
 
 
+class Terminated(BaseException):
+    """SIGTERM, raised where the command is, so that it unwinds as after Ctrl-C: its output undone
+    (:class:`~identification._files.OutputFolders`), its temporary folders removed, its workers stopped."""
+
+
+#: Exit status after SIGTERM: 128 + 15, what a shell reports for a program SIGTERM stopped.
+EXIT_TERMINATED = 143
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
+def _catch_sigterm():
+    """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only); returns the previous
+    handler, or None where it cannot be set."""
+    import identification
+
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+        return signal.SIG_DFL if previous is identification._defer_interrupt else previous
+    except ValueError:          # not the main thread (a notebook's worker thread): SIGTERM keeps its default
+        return None
+
+
+def _answer_early_interrupt() -> None:
+    """Ctrl-C from here on raises KeyboardInterrupt (SIGTERM :class:`Terminated`, :func:`_catch_sigterm`); one
+    that came while the program's modules were imported (:mod:`identification` defers both when it is the
+    program) is raised now."""
+    import identification
+
+    if signal.getsignal(signal.SIGINT) is identification._defer_interrupt:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    early, identification._interrupted = identification._interrupted, 0
+    if early == signal.SIGINT:
+        raise KeyboardInterrupt
+    if early == signal.SIGTERM:
+        raise Terminated()
+
+
 def _run(argv) -> int:
     parser = build_parser(_command_of(argv))
     try:
@@ -142,7 +183,8 @@ def _run(argv) -> int:
         with OutputFolders() as folders:
             status = args.func(args)
             _flush_stdout()
-            if status:
+            if status:              # a failed command keeps what it wrote (a report of the readable
+                folders.keep()      # recordings), only the folders it made and left empty go
                 folders.remove()
         return status
     except InputError as exc:
@@ -151,6 +193,9 @@ def _run(argv) -> int:
     except KeyboardInterrupt:
         print("cleatfmu: interrupted", file=sys.stderr)
         return 130
+    except Terminated:
+        print("cleatfmu: terminated", file=sys.stderr)
+        return EXIT_TERMINATED
     except BrokenPipeError:
         raise
     except OSError as exc:
@@ -178,7 +223,8 @@ def main(argv=None) -> int:
     Returns
     -------
     int
-        0 on success; 2 for a user error (one line on stderr, nothing written); 130 when interrupted;
+        0 on success; 2 for a user error (one line on stderr, nothing written); 130 when interrupted
+        (Ctrl-C) and :data:`EXIT_TERMINATED` (143) after SIGTERM, with the output undone;
         :data:`EXIT_CLOSED_PIPE` (141), silently, when stdout is a pipe closed before the output was
         written (``cleatfmu identify --example | head -1``).
     """
@@ -186,13 +232,24 @@ def main(argv=None) -> int:
         print("cleatfmu: error: stdout: closed (the result would be lost); redirect it to a file or a pipe",
               file=sys.stderr)
         return 2
+    previous = _catch_sigterm()
     try:
+        _answer_early_interrupt()
         return _run(argv)
     except BrokenPipeError:
         if not _stdout_is_a_pipe():
             raise
         _silence_stdout()
         return EXIT_CLOSED_PIPE
+    except KeyboardInterrupt:      # before the command ran (its imports): nothing was written
+        print("cleatfmu: interrupted", file=sys.stderr)
+        return 130
+    except Terminated:
+        print("cleatfmu: terminated", file=sys.stderr)
+        return EXIT_TERMINATED
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":  # pragma: no cover
