@@ -14,7 +14,7 @@ import os
 from ..errors import InputError
 from .._files import json_text
 
-__all__ = ["add_parser", "run", "DEFAULT_COMPARE"]
+__all__ = ["add_parser", "run", "DEFAULT_COMPARE", "format_expected"]
 
 DEFAULT_COMPARE = "paper,final"
 _CLASSES = ("A", "B", "C", "D", "E")
@@ -39,7 +39,12 @@ def add_parser(subparsers) -> None:
                         "FMUs in DIR, *_FL.fmu .. *_RR.fmu, as exported), params=FILE (the k, c of an "
                         "'identify --json' file of the four tires); "
                         f"default {DEFAULT_COMPARE})")
-    p.add_argument("--seed", type=int, default=1, help="seed of the road profile (default 1)")
+    p.add_argument("--seed", type=int, default=1,
+                   help="seed of the first road; the other realisations' seeds are derived from it (default 1)")
+    p.add_argument("--realisations", type=int, default=None,
+                   help="roads of the class to ride (seeds derived from --seed): every rating as its expected "
+                        "value, the 95 %% interval of that mean and of a single ride "
+                        f"(default {_default_realisations()})")
     p.add_argument("--seat-x-m", type=float, default=None,
                    help="seat position behind the front axle, m (default: 0.85 of the wheelbase)")
     p.add_argument("--seat-y", type=float, default=0.0,
@@ -53,7 +58,20 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+def _default_realisations() -> int:
+    from ..comfort.expected import DEFAULT_REALISATIONS
+    return DEFAULT_REALISATIONS
+
+
 def _check(args) -> list:
+    from ..comfort.expected import MAX_REALISATIONS
+
+    if args.realisations is None:
+        args.realisations = _default_realisations()
+    if not 1 <= args.realisations <= MAX_REALISATIONS:
+        raise InputError("--realisations", f"1 .. {MAX_REALISATIONS} expected, got {args.realisations}")
+    if args.seed < 0:
+        raise InputError("--seed", f"an integer >= 0 expected, got {args.seed}")
     if args.road not in _CLASSES:
         raise InputError("--road", f"unknown ISO 8608 class {args.road!r} (A, B, C, D or E)")
     if args.speed_kmh is not None and not (math.isfinite(args.speed_kmh) and 1.0 <= args.speed_kmh <= 60.0):
@@ -92,7 +110,8 @@ def run(args) -> int:
     runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
                                 speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
                                 duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
-                                exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp)
+                                exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp,
+                                realisations=args.realisations)
     speed, seat_x, how = doc["speed_m_s"], doc["seat"]["x_m"], doc["body"]["source"]
     if args.plot:
         from ..report.plots import plot_ride, save_png
@@ -107,9 +126,39 @@ def run(args) -> int:
             ks = "/".join(f"{r.k[t] / 1e3:.0f}" for t in r.k)
             a8 = r.comfort.exposure.a8 if r.comfort.exposure else float("nan")
             print(f"{name:<16}{ks:>24}{r.comfort.a_w:>10.3f}{r.comfort.vdv:>8.3f}{r.comfort.mtvv:>8.3f}{a8:>8.3f}")
+        print(format_expected(doc))
+        print(f"seat: {doc['seat']['values']}")
         if args.plot:
             print(f"wrote {args.plot}")
         for name, path in doc.get("ssp", {}).items():
             print(f"wrote {path}: the ride with set {name} as an SSP 1.0 system of FMUs")
     return 0
 
+
+
+def format_expected(doc: dict) -> str:
+    """The expected ratings of a ``ride`` document as text: per set and rating the mean, the interval of
+    the mean and the single-ride interval; the a_w from the road PSD against the realisations'."""
+    first = next(iter(doc["sets"].values()))["expected"]
+    n = first["realisations"]
+    if n < 2:
+        return "one road: no expected values (--realisations N for N roads)"
+    level = f"{first['a_w']['level']:.0%}"
+    keys = [k for k in ("a_w", "vdv", "mtvv", "a8") if k in first]
+    label = {"a_w": "a_w m/s2", "vdv": "VDV m/s^1.75", "mtvv": "MTVV m/s2", "a8": "A(8) m/s2"}
+    lines = [f"expected over {n} roads (seeds derived from {doc['road']['seed']}): mean [{level} interval of the "
+             f"mean] ({level} of single rides)",
+             f"{'set':<16}" + "".join(f"{label[k]:>32}" for k in keys)]
+    for name, entry in doc["sets"].items():
+        e = entry["expected"]
+        cells = []
+        for k in keys:
+            s = e[k]
+            lo, hi = s["mean_interval"]
+            slo, shi = s["single_ride_interval"]
+            cells.append(f"{s['mean']:.3f} [{lo:.3f},{hi:.3f}] ({slo:.2f}-{shi:.2f})")
+        lines.append(f"{name:<16}" + "".join(f"{c:>32}" for c in cells))
+    lines.append("a_w from the road PSD (linear model): " + ", ".join(
+        f"{name} {e['expected']['psd']['a_w']:.3f} (realisations {e['expected']['psd']['monte_carlo_rms_a_w']:.3f})"
+        for name, e in doc["sets"].items()))
+    return "\n".join(lines)

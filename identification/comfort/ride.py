@@ -42,6 +42,9 @@ def seat_acceleration(model: TractorModel, trajectory, *, seat_x_m: float, seat_
 
 # ----------------------------------------------------------------------------- rides and parameter sets
 
+#: What the seat's ratings are: the seat is a point of the body.
+FLOOR_VALUES = "floor values: the seat is a point of the body, no seat suspension"
+
 #: Default seat position behind the front axle, as a fraction of the wheelbase (a tractor's seat sits
 #: ahead of, and close to, the rear axle).
 SEAT_X_FRACTION = 0.85
@@ -264,30 +267,45 @@ REPORT_RIDE = {"road_class": "B", "seed": 1, "duration_s": 60.0, "names": ("pape
 
 def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m_s: float | None = None,
                     duration_s: float = 60.0, seat_x_m: float | None = None, seat_y: float = 0.0,
-                    exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1, ssp_dir=None) -> tuple:
-    """The recording's tractor on an ISO 8608 road with each parameter set: (runs, JSON document).
+                    exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1, ssp_dir=None,
+                    realisations: int = 1) -> tuple:
+    """The recording's tractor on ISO 8608 roads with each parameter set: (runs, JSON document).
 
     Combines :func:`parameter_sets`, :func:`identification.comfort.road.road_profile` (grid ROAD_SPACING_M)
-    and :func:`ride`; `speed_m_s` defaults to the recording's.  The document holds the road, the speed,
-    the seat, the body and per set its k, c and rating (SI units), as ``cleatfmu ride --json`` prints it.
-    With `ssp_dir` every set's ride is also written there as an SSP 1.0 system of FMUs
+    and :func:`ride`; `speed_m_s` defaults to the recording's.  The tractor rides `realisations` roads of the
+    class, seeded by :func:`identification.comfort.expected.realisation_seeds` (`seed`'s road first).  The
+    document holds the road, the speed, the seat, the body and per set its k, c, the rating of the ride on
+    `seed`'s road and (``expected``) every rating's expected value with its intervals and the a_w from the
+    road PSD (SI units), as ``cleatfmu ride --json`` prints it.  The returned runs are those on `seed`'s
+    road.  With `ssp_dir` every set's ride on that road is also written there as an SSP 1.0 system of FMUs
     (:func:`identification.comfort.ride_ssp.write_ride_ssps`; ``doc["ssp"]``).
     """
+    from .expected import expected_set, rating_values, realisation_seeds
     from .road import road_profile
 
+    seeds = realisation_seeds(seed, realisations)
     speed = rec.speed_m_s if speed_m_s is None else float(speed_m_s)
     body, sets, how = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers)
-    road = road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M, seed)
-    runs = ride(body, sets, road=road, speed_m_s=speed, duration_s=duration_s, seat_x_m=seat_x_m,
-                seat_y=seat_y, exposure_h=exposure_h)
+    every = []
+    for s in seeds:
+        road_s = road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M, s)
+        every.append(ride(body, sets, road=road_s, speed_m_s=speed, duration_s=duration_s, seat_x_m=seat_x_m,
+                          seat_y=seat_y, exposure_h=exposure_h))
+        if len(every) == 1:
+            road = road_s                       # seed's own road: the runs returned, the SSP archives
+    runs = every[0]
     seat_x = SEAT_X_FRACTION * body.wheelbase_m if seat_x_m is None else float(seat_x_m)
+    row = seat_row(body, seat_x_m=seat_x, seat_y=seat_y)
     doc = {"recording": rec.source,
-           "road": {"class": road.road_class, "seed": int(seed), "length_m": float(road.x_m[-1]),
+           "road": {"class": road.road_class, "seed": int(seed), "realisations": len(seeds), "length_m": float(road.x_m[-1]),
                     "track_width_m": road.track_width_m, "coherence_decay": road.coherence_decay},
-           "speed_m_s": speed, "duration_s": float(duration_s), "seat": {"x_m": seat_x, "y": float(seat_y)},
+           "speed_m_s": speed, "duration_s": float(duration_s), "seat": {"x_m": seat_x, "y": float(seat_y), "values": FLOOR_VALUES},
            "body": {"kind": body.kind, "pitch_index": body.pitch_index, "roll_index": body.roll_index,
                     **({"pivot_index": body.pivot_index} if body.pivot else {}), "source": how},
            "sets": {name: r.to_json() for name, r in runs.items()}}
+    for name, (k, c) in sets.items():
+        doc["sets"][name]["expected"] = expected_set([rating_values(e[name].comfort) for e in every], body=body,
+                                                     k=k, c=c, row=row, road=road, speed_m_s=speed, seeds=seeds)
     if ssp_dir is not None:
         from .ride_ssp import write_ride_ssps
         paths = write_ride_ssps(ssp_dir, body, sets, road=road, speed_m_s=speed, duration_s=duration_s,
