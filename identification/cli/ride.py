@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 
 from ..errors import InputError
 from .._files import json_text
 
-__all__ = ["add_parser", "run", "DEFAULT_COMPARE", "format_expected"]
+__all__ = ["add_parser", "run", "DEFAULT_COMPARE", "format_expected", "format_contact"]
 
 DEFAULT_COMPARE = "paper,final"
 _CLASSES = ("A", "B", "C", "D", "E")
@@ -49,6 +50,10 @@ def add_parser(subparsers) -> None:
                    help="seat position behind the front axle, m (default: 0.85 of the wheelbase)")
     p.add_argument("--seat-y", type=float, default=0.0,
                    help="seat position from the centre line, fraction of the half-track (+ left; default 0)")
+    p.add_argument("--tires", choices=("auto", "linear", "lift-off"), default="auto",
+                   help="tire law rated: auto (default) rides the linear law and, where a tire would pull "
+                        "(tension), the ride again with the law's lift-off option; linear; lift-off. The "
+                        "linear law's tension is always counted")
     p.add_argument("--exposure-h", type=float, default=8.0, help="daily exposure time for A(8), h (default 8)")
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="processes of the diagnosis (default: 2 or the CPU count)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
@@ -111,8 +116,11 @@ def run(args) -> int:
                                 speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
                                 duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
                                 exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp,
-                                realisations=args.realisations)
+                                realisations=args.realisations, tires=args.tires)
     speed, seat_x, how = doc["speed_m_s"], doc["seat"]["x_m"], doc["body"]["source"]
+    for name, entry in doc["sets"].items():
+        if entry["expected"]["contact"]["warning"]:
+            print(f"cleatfmu: warning: set {name}: {entry['expected']['contact']['warning']}", file=sys.stderr)
     if args.plot:
         from ..report.plots import plot_ride, save_png
         save_png(plot_ride(runs, road_class=args.road, speed_m_s=speed), args.plot)
@@ -127,6 +135,7 @@ def run(args) -> int:
             a8 = r.comfort.exposure.a8 if r.comfort.exposure else float("nan")
             print(f"{name:<16}{ks:>24}{r.comfort.a_w:>10.3f}{r.comfort.vdv:>8.3f}{r.comfort.mtvv:>8.3f}{a8:>8.3f}")
         print(format_expected(doc))
+        print(format_contact(doc))
         print(f"seat: {doc['seat']['values']}")
         if args.plot:
             print(f"wrote {args.plot}")
@@ -148,7 +157,7 @@ def format_expected(doc: dict) -> str:
     label = {"a_w": "a_w m/s2", "vdv": "VDV m/s^1.75", "mtvv": "MTVV m/s2", "a8": "A(8) m/s2"}
     lines = [f"expected over {n} roads (seeds derived from {doc['road']['seed']}): mean [{level} interval of the "
              f"mean] ({level} of single rides)",
-             f"{'set':<16}" + "".join(f"{label[k]:>32}" for k in keys)]
+             f"{'set':<16}" + "".join(f"{label[k]:>34}" for k in keys)]
     for name, entry in doc["sets"].items():
         e = entry["expected"]
         cells = []
@@ -157,8 +166,28 @@ def format_expected(doc: dict) -> str:
             lo, hi = s["mean_interval"]
             slo, shi = s["single_ride_interval"]
             cells.append(f"{s['mean']:.3f} [{lo:.3f},{hi:.3f}] ({slo:.2f}-{shi:.2f})")
-        lines.append(f"{name:<16}" + "".join(f"{c:>32}" for c in cells))
-    lines.append("a_w from the road PSD (linear model): " + ", ".join(
-        f"{name} {e['expected']['psd']['a_w']:.3f} (realisations {e['expected']['psd']['monte_carlo_rms_a_w']:.3f})"
+        lines.append(f"{name:<16}" + "".join(f"{c:>34}" for c in cells))
+    lines.append("a_w from the road PSD (linear tires): " + ", ".join(
+        f"{name} {e['expected']['psd']['a_w']:.3f} (realisations {e['expected']['psd']['monte_carlo_rms_a_w']:.3f}"
+        + (", rated with the lift-off law" if e["expected"]["contact"]["lift_off_rides"] else "") + ")"
         for name, e in doc["sets"].items()))
+    return "\n".join(lines)
+
+
+def format_contact(doc: dict) -> str:
+    """The tires' contact of a ``ride`` document as text: per set the linear law's tension and, where the
+    lift-off law ran, the share of the ride each tire was off the ground (means over the roads)."""
+    lines = []
+    for name, entry in doc["sets"].items():
+        c = entry["expected"]["contact"]
+        tension = " ".join(f"{t} {v:.2%}" for t, v in c["tension_share"].items())
+        line = f"{name}: linear tires in tension {tension} of the ride"
+        if any(v > 0 for v in c["tension_share"].values()):
+            pull = max(c["largest_pull"].values())
+            longest = max(c["longest_tension_s"].values())
+            line += f" (longest {longest * 1e3:.0f} ms, largest pull {pull:.2f} x the static load)"
+        if c["lift_off_rides"]:
+            lost = " ".join(f"{t} {v:.2%}" for t, v in c["lost_contact_share"].items())
+            line += f"; lift-off law on {c['lift_off_rides']} of {c['rides']} roads: off the ground {lost}"
+        lines.append(line)
     return "\n".join(lines)
