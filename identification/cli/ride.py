@@ -15,7 +15,7 @@ import sys
 from ..errors import InputError
 from .._files import json_text
 
-__all__ = ["add_parser", "run", "DEFAULT_COMPARE", "format_expected", "format_contact"]
+__all__ = ["add_parser", "run", "DEFAULT_COMPARE", "format_expected", "format_contact", "format_axes"]
 
 DEFAULT_COMPARE = "paper,final"
 _CLASSES = ("A", "B", "C", "D", "E")
@@ -54,6 +54,9 @@ def add_parser(subparsers) -> None:
                    help="tire law rated: auto (default) rides the linear law and, where a tire would pull "
                         "(tension), the ride again with the law's lift-off option; linear; lift-off. The "
                         "linear law's tension is always counted")
+    p.add_argument("--seat-height-m", type=float, default=None,
+                   help="seat height above the axles, m, for the seat's fore-aft (pitch) and lateral (roll) "
+                        "acceleration (default 0.9)")
     p.add_argument("--exposure-h", type=float, default=8.0, help="daily exposure time for A(8), h (default 8)")
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="processes of the diagnosis (default: 2 or the CPU count)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
@@ -89,6 +92,8 @@ def _check(args) -> list:
         raise InputError("--seat-y", f"a fraction of the half-track within ±1.5 is expected, got {args.seat_y:g}")
     if args.seat_x_m is not None and not math.isfinite(args.seat_x_m):
         raise InputError("--seat-x-m", f"a finite position is expected, got {args.seat_x_m:g}")
+    if args.seat_height_m is not None and not (math.isfinite(args.seat_height_m) and -1.0 <= args.seat_height_m <= 5.0):
+        raise InputError("--seat-height-m", f"-1 .. 5 m above the axles expected, got {args.seat_height_m:g}")
     if args.workers < 1:
         raise InputError("--workers", f"at least 1, got {args.workers}")
     from ..comfort.ride import check_set_names
@@ -116,7 +121,8 @@ def run(args) -> int:
                                 speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
                                 duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
                                 exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp,
-                                realisations=args.realisations, tires=args.tires)
+                                realisations=args.realisations, tires=args.tires,
+                                seat_height_m=args.seat_height_m)
     speed, seat_x, how = doc["speed_m_s"], doc["seat"]["x_m"], doc["body"]["source"]
     for name, entry in doc["sets"].items():
         if entry["expected"]["contact"]["warning"]:
@@ -136,6 +142,7 @@ def run(args) -> int:
             print(f"{name:<16}{ks:>24}{r.comfort.a_w:>10.3f}{r.comfort.vdv:>8.3f}{r.comfort.mtvv:>8.3f}{a8:>8.3f}")
         print(format_expected(doc))
         print(format_contact(doc))
+        print(format_axes(doc))
         print(f"seat: {doc['seat']['values']}")
         if args.plot:
             print(f"wrote {args.plot}")
@@ -189,5 +196,27 @@ def format_contact(doc: dict) -> str:
         if c["lift_off_rides"]:
             lost = " ".join(f"{t} {v:.2%}" for t, v in c["lost_contact_share"].items())
             line += f"; lift-off law on {c['lift_off_rides']} of {c['rides']} roads: off the ground {lost}"
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def format_axes(doc: dict) -> str:
+    """The seat's three axes of a ``ride`` document as text (expected values over the roads): a_w per axis
+    (x, y Wd; z Wk), the vector sum (k 1.4, 1.4, 1) and the worst axis's A(8) against 2002/44/EC."""
+    from ..comfort.iso2631 import EU_A8_ACTION_M_S2, EU_A8_LIMIT_M_S2
+
+    seat = doc["seat"]
+    lines = [f"seat's three axes ({seat['height_m']:g} m above the axles; expected a_w, m/s2): x, y Wd, z Wk; "
+             f"vector sum with k = 1.4, 1.4, 1"]
+    for name, entry in doc["sets"].items():
+        e = entry["expected"]
+        line = (f"{name}: x {e['x_a_w']['mean']:.3f}, y {e['y_a_w']['mean']:.3f}, z {e['z_a_w']['mean']:.3f}, "
+                f"vector sum {e['vector_sum_health']['mean']:.3f}")
+        if "a8_worst_axis" in e:
+            a8 = e["a8_worst_axis"]["mean"]
+            status = "above the limit" if a8 > EU_A8_LIMIT_M_S2 else "above the action value" \
+                if a8 > EU_A8_ACTION_M_S2 else "below the action value"
+            line += (f"; A(8) {a8:.3f} on axis {entry['three_axes']['exposure']['a8_axis']} "
+                     f"({status}, {EU_A8_ACTION_M_S2:g} / {EU_A8_LIMIT_M_S2:g})")
         lines.append(line)
     return "\n".join(lines)

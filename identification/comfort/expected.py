@@ -184,7 +184,7 @@ def rating_values(result) -> dict:
 
 
 def expected_set(per_ride: list, *, body: Body, k: dict, c: dict, row, road, speed_m_s: float,
-                 seeds: list, level: float = LEVEL) -> dict:
+                 seeds: list, level: float = LEVEL, rows: dict | None = None) -> dict:
     """One parameter set's expected ratings over its rides on the realisations (JSON-ready, SI units).
 
     Parameters
@@ -195,6 +195,9 @@ def expected_set(per_ride: list, *, body: Body, k: dict, c: dict, row, road, spe
         As for :func:`psd_rating` (the seat's vertical row, Wk).
     seeds : list of int
         The realisations' road seeds.
+    rows : dict, optional
+        The seat's ``x`` and ``y`` rows (:func:`identification.comfort.seat_axes.axis_rows`): their a_w from the
+        PSD (Wd) as well.
 
     Returns
     -------
@@ -208,4 +211,9 @@ def expected_set(per_ride: list, *, body: Body, k: dict, c: dict, row, road, spe
     predicted = psd_rating(body, k, c, row, road=road, speed_m_s=speed_m_s, weighting="Wk")
     rms = float(math.sqrt(np.mean([r["a_w"] ** 2 for r in per_ride])))
     doc["psd"] = {"a_w": predicted, "monte_carlo_rms_a_w": rms, "ratio": rms / predicted if predicted > 0 else None}
+    for axis in ("x", "y") if rows is not None else ():
+        doc["psd"][f"{axis}_a_w"] = psd_rating(body, k, c, rows[axis], road=road, speed_m_s=speed_m_s, weighting="Wd")
+        if f"{axis}_a_w" in per_ride[0]:
+            doc["psd"][f"{axis}_monte_carlo_rms_a_w"] = float(math.sqrt(np.mean([r[f"{axis}_a_w"] ** 2
+                                                                                 for r in per_ride])))
     return doc
