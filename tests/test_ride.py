@@ -128,6 +128,9 @@ def test_seat_a_w_on_an_iso_8608_road_matches_the_spectral_prediction():
     (["--seat-y", "7"], "--seat-y"),
     (["--seat-x-m", "40"], "--seat-x-m"),
     (["--exposure-h", "30"], "--exposure-h"),
+    (["--realisations", "0"], "--realisations"),
+    (["--seed", "-1"], "--seed"),
+    (["--seat-height-m", "9"], "--seat-height-m"),
 ])
 def test_ride_bad_options_end_in_one_line_exit_2_and_nothing_written(cli, tmp_path, args, source):
     plot = tmp_path / "ride.png"

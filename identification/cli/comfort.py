@@ -43,6 +43,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--exposure-h", metavar="H",
                    help=f"daily exposure time, h (0 < H <= 24), for A(8) and the daily VDV (default: "
                         f"{DEFAULT_EXPOSURE_H:g} for Wk and Wd; Wf has no exposure values)")
+    p.add_argument("--axes", metavar="X,Y,Z",
+                   help="rate a seat's three axes: the fore-aft, lateral and vertical columns (weighted Wd, Wd, Wk): "
+                        "a_w, VDV, MTVV per axis, the vector sum (k = 1.4, 1.4, 1) and the worst axis's A(8) and "
+                        "daily VDV against 2002/44/EC (--weighting and --column do not apply)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units) instead of a table")
     p.set_defaults(func=run)
 
@@ -179,8 +183,51 @@ def format_table(path, weighting, results: dict) -> str:
     return "\n".join(lines)
 
 
+def _three_axes(args) -> int:
+    """``cleatfmu comfort --axes X,Y,Z``: the seat's three axes (:mod:`identification.comfort.seat_axes`)."""
+    from ..comfort.seat_axes import AXES, three_axis
+
+    cols = [c.strip() for c in args.axes.split(",")]
+    if len(cols) != 3 or not all(cols) or len(set(cols)) != 3:
+        raise InputError("--axes", f"three different column names X,Y,Z expected, got {args.axes!r}")
+    if args.column is not None:
+        raise InputError("--column", "does not apply with --axes")
+    exposure_h = _exposure_h(args.exposure_h, "Wk")
+    names, fs, columns = read_acceleration_csv(args.acc)
+    missing = [c for c in cols if c not in names]
+    if missing:
+        raise InputError("--axes", f"{args.acc} has no column {missing[0]!r} (columns: {', '.join(names)})")
+    if fs < 160.0:
+        raise InputError(args.acc, f"sampling rate {fs:.6g} Hz is too low for Wk and Wd: at least 160 Hz needed")
+    try:
+        r = three_axis(*(columns[c] for c in cols), fs, exposure_h=exposure_h)
+    except InputError as exc:
+        raise InputError(args.acc, exc.problem) from None
+    doc = {"file": str(args.acc), "columns": dict(zip(AXES, cols)), "sample_rate_hz": fs, **r.to_json()}
+    if args.json:
+        print(json_text(doc))
+        return 0
+    lines = [f"{args.acc}: ISO 2631-1 seat, three axes, {fs:.6g} Hz, {r.axes['z'].duration_s:.4g} s",
+             f"{'axis':<6}{'column':<12}{'weighting':>10}{'k':>5}{'a_w':>9}{'MTVV':>9}{'VDV':>10}"]
+    for a, c in zip(AXES, cols):
+        x = r.axes[a]
+        lines.append(f"{a:<6}{c:<12}{x.weighting:>10}{doc['axes'][a]['k']:>5g}{_fmt(x.a_w):>9}{_fmt(x.mtvv):>9}"
+                     f"{_fmt(x.vdv):>10}")
+    lines.append(f"vector sum a_v (k 1.4, 1.4, 1): {_fmt(r.vector_sum_health)} m/s²; with k = 1 (comfort): "
+                 f"{_fmt(r.vector_sum_comfort)} m/s²")
+    e = doc["exposure"]
+    lines.append(f"daily exposure {e['exposure_h']:g} h: A(8) {_fmt(e['a8'])} m/s² on axis {e['a8_axis']} "
+                 f"({e['a8_status'].replace('_', ' ')} value; action {e['a8_action']:g} / limit {e['a8_limit']:g}), "
+                 f"daily VDV {_fmt(e['vdv'])} m/s^1.75 on axis {e['vdv_axis']} ({e['vdv_status'].replace('_', ' ')} "
+                 f"value; {e['vdv_action']:g} / {e['vdv_limit']:g})")
+    print("\n".join(lines))
+    return 0
+
+
 def run(args) -> int:
     """``cleatfmu comfort``: returns the exit status; raises InputError for bad input."""
+    if args.axes is not None:
+        return _three_axes(args)
     exposure_h = _exposure_h(args.exposure_h, args.weighting)
     names, fs, columns = read_acceleration_csv(args.acc)
     if args.column is not None:

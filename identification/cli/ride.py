@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 
 from ..errors import InputError
 from .._files import json_text
 
-__all__ = ["add_parser", "run", "DEFAULT_COMPARE"]
+__all__ = ["add_parser", "run", "DEFAULT_COMPARE", "format_expected", "format_contact", "format_axes"]
 
 DEFAULT_COMPARE = "paper,final"
 _CLASSES = ("A", "B", "C", "D", "E")
@@ -39,11 +40,23 @@ def add_parser(subparsers) -> None:
                         "FMUs in DIR, *_FL.fmu .. *_RR.fmu, as exported), params=FILE (the k, c of an "
                         "'identify --json' file of the four tires); "
                         f"default {DEFAULT_COMPARE})")
-    p.add_argument("--seed", type=int, default=1, help="seed of the road profile (default 1)")
+    p.add_argument("--seed", type=int, default=1,
+                   help="seed of the first road; the other realisations' seeds are derived from it (default 1)")
+    p.add_argument("--realisations", type=int, default=None,
+                   help="roads of the class to ride (seeds derived from --seed): every rating as its expected "
+                        "value, the 95 %% interval of that mean and of a single ride "
+                        f"(default {_default_realisations()})")
     p.add_argument("--seat-x-m", type=float, default=None,
                    help="seat position behind the front axle, m (default: 0.85 of the wheelbase)")
     p.add_argument("--seat-y", type=float, default=0.0,
                    help="seat position from the centre line, fraction of the half-track (+ left; default 0)")
+    p.add_argument("--tires", choices=("auto", "linear", "lift-off"), default="auto",
+                   help="tire law rated: auto (default) rides the linear law and, where a tire would pull "
+                        "(tension), the ride again with the law's lift-off option; linear; lift-off. The "
+                        "linear law's tension is always counted")
+    p.add_argument("--seat-height-m", type=float, default=None,
+                   help="seat height above the axles, m, for the seat's fore-aft (pitch) and lateral (roll) "
+                        "acceleration (default 0.9)")
     p.add_argument("--exposure-h", type=float, default=8.0, help="daily exposure time for A(8), h (default 8)")
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="processes of the diagnosis (default: 2 or the CPU count)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
@@ -53,7 +66,20 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+def _default_realisations() -> int:
+    from ..comfort.expected import DEFAULT_REALISATIONS
+    return DEFAULT_REALISATIONS
+
+
 def _check(args) -> list:
+    from ..comfort.expected import MAX_REALISATIONS
+
+    if args.realisations is None:
+        args.realisations = _default_realisations()
+    if not 1 <= args.realisations <= MAX_REALISATIONS:
+        raise InputError("--realisations", f"1 .. {MAX_REALISATIONS} expected, got {args.realisations}")
+    if args.seed < 0:
+        raise InputError("--seed", f"an integer >= 0 expected, got {args.seed}")
     if args.road not in _CLASSES:
         raise InputError("--road", f"unknown ISO 8608 class {args.road!r} (A, B, C, D or E)")
     if args.speed_kmh is not None and not (math.isfinite(args.speed_kmh) and 1.0 <= args.speed_kmh <= 60.0):
@@ -66,6 +92,8 @@ def _check(args) -> list:
         raise InputError("--seat-y", f"a fraction of the half-track within ±1.5 is expected, got {args.seat_y:g}")
     if args.seat_x_m is not None and not math.isfinite(args.seat_x_m):
         raise InputError("--seat-x-m", f"a finite position is expected, got {args.seat_x_m:g}")
+    if args.seat_height_m is not None and not (math.isfinite(args.seat_height_m) and -1.0 <= args.seat_height_m <= 5.0):
+        raise InputError("--seat-height-m", f"-1 .. 5 m above the axles expected, got {args.seat_height_m:g}")
     if args.workers < 1:
         raise InputError("--workers", f"at least 1, got {args.workers}")
     from ..comfort.ride import check_set_names
@@ -92,8 +120,13 @@ def run(args) -> int:
     runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
                                 speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
                                 duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
-                                exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp)
+                                exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp,
+                                realisations=args.realisations, tires=args.tires,
+                                seat_height_m=args.seat_height_m)
     speed, seat_x, how = doc["speed_m_s"], doc["seat"]["x_m"], doc["body"]["source"]
+    for name, entry in doc["sets"].items():
+        if entry["expected"]["contact"]["warning"]:
+            print(f"cleatfmu: warning: set {name}: {entry['expected']['contact']['warning']}", file=sys.stderr)
     if args.plot:
         from ..report.plots import plot_ride, save_png
         save_png(plot_ride(runs, road_class=args.road, speed_m_s=speed), args.plot)
@@ -107,9 +140,83 @@ def run(args) -> int:
             ks = "/".join(f"{r.k[t] / 1e3:.0f}" for t in r.k)
             a8 = r.comfort.exposure.a8 if r.comfort.exposure else float("nan")
             print(f"{name:<16}{ks:>24}{r.comfort.a_w:>10.3f}{r.comfort.vdv:>8.3f}{r.comfort.mtvv:>8.3f}{a8:>8.3f}")
+        print(format_expected(doc))
+        print(format_contact(doc))
+        print(format_axes(doc))
+        print(f"seat: {doc['seat']['values']}")
         if args.plot:
             print(f"wrote {args.plot}")
         for name, path in doc.get("ssp", {}).items():
             print(f"wrote {path}: the ride with set {name} as an SSP 1.0 system of FMUs")
     return 0
 
+
+
+def format_expected(doc: dict) -> str:
+    """The expected ratings of a ``ride`` document as text: per set and rating the mean, the interval of
+    the mean and the single-ride interval; the a_w from the road PSD against the realisations'."""
+    first = next(iter(doc["sets"].values()))["expected"]
+    n = first["realisations"]
+    if n < 2:
+        return "one road: no expected values (--realisations N for N roads)"
+    level = f"{first['a_w']['level']:.0%}"
+    keys = [k for k in ("a_w", "vdv", "mtvv", "a8") if k in first]
+    label = {"a_w": "a_w m/s2", "vdv": "VDV m/s^1.75", "mtvv": "MTVV m/s2", "a8": "A(8) m/s2"}
+    lines = [f"expected over {n} roads (seeds derived from {doc['road']['seed']}): mean [{level} interval of the "
+             f"mean] ({level} of single rides)",
+             f"{'set':<16}" + "".join(f"{label[k]:>34}" for k in keys)]
+    for name, entry in doc["sets"].items():
+        e = entry["expected"]
+        cells = []
+        for k in keys:
+            s = e[k]
+            lo, hi = s["mean_interval"]
+            slo, shi = s["single_ride_interval"]
+            cells.append(f"{s['mean']:.3f} [{lo:.3f},{hi:.3f}] ({slo:.2f}-{shi:.2f})")
+        lines.append(f"{name:<16}" + "".join(f"{c:>34}" for c in cells))
+    lines.append("a_w from the road PSD (linear tires): " + ", ".join(
+        f"{name} {e['expected']['psd']['a_w']:.3f} (realisations {e['expected']['psd']['monte_carlo_rms_a_w']:.3f}"
+        + (", rated with the lift-off law" if e["expected"]["contact"]["lift_off_rides"] else "") + ")"
+        for name, e in doc["sets"].items()))
+    return "\n".join(lines)
+
+
+def format_contact(doc: dict) -> str:
+    """The tires' contact of a ``ride`` document as text: per set the linear law's tension and, where the
+    lift-off law ran, the share of the ride each tire was off the ground (means over the roads)."""
+    lines = []
+    for name, entry in doc["sets"].items():
+        c = entry["expected"]["contact"]
+        tension = " ".join(f"{t} {v:.2%}" for t, v in c["tension_share"].items())
+        line = f"{name}: linear tires in tension {tension} of the ride"
+        if any(v > 0 for v in c["tension_share"].values()):
+            pull = max(c["largest_pull"].values())
+            longest = max(c["longest_tension_s"].values())
+            line += f" (longest {longest * 1e3:.0f} ms, largest pull {pull:.2f} x the static load)"
+        if c["lift_off_rides"]:
+            lost = " ".join(f"{t} {v:.2%}" for t, v in c["lost_contact_share"].items())
+            line += f"; lift-off law on {c['lift_off_rides']} of {c['rides']} roads: off the ground {lost}"
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def format_axes(doc: dict) -> str:
+    """The seat's three axes of a ``ride`` document as text (expected values over the roads): a_w per axis
+    (x, y Wd; z Wk), the vector sum (k 1.4, 1.4, 1) and the worst axis's A(8) against 2002/44/EC."""
+    from ..comfort.iso2631 import EU_A8_ACTION_M_S2, EU_A8_LIMIT_M_S2
+
+    seat = doc["seat"]
+    lines = [f"seat's three axes ({seat['height_m']:g} m above the axles; expected a_w, m/s2): x, y Wd, z Wk; "
+             f"vector sum with k = 1.4, 1.4, 1"]
+    for name, entry in doc["sets"].items():
+        e = entry["expected"]
+        line = (f"{name}: x {e['x_a_w']['mean']:.3f}, y {e['y_a_w']['mean']:.3f}, z {e['z_a_w']['mean']:.3f}, "
+                f"vector sum {e['vector_sum_health']['mean']:.3f}")
+        if "a8_worst_axis" in e:
+            a8 = e["a8_worst_axis"]["mean"]
+            status = "above the limit" if a8 > EU_A8_LIMIT_M_S2 else "above the action value" \
+                if a8 > EU_A8_ACTION_M_S2 else "below the action value"
+            line += (f"; A(8) {a8:.3f} on axis {entry['three_axes']['exposure']['a8_axis']} "
+                     f"({status}, {EU_A8_ACTION_M_S2:g} / {EU_A8_LIMIT_M_S2:g})")
+        lines.append(line)
+    return "\n".join(lines)

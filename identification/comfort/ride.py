@@ -42,6 +42,9 @@ def seat_acceleration(model: TractorModel, trajectory, *, seat_x_m: float, seat_
 
 # ----------------------------------------------------------------------------- rides and parameter sets
 
+#: What the seat's ratings are: the seat is a point of the body.
+FLOOR_VALUES = "floor values: the seat is a point of the body, no seat suspension"
+
 #: Default seat position behind the front axle, as a fraction of the wheelbase (a tractor's seat sits
 #: ahead of, and close to, the rear axle).
 SEAT_X_FRACTION = 0.85
@@ -61,13 +64,21 @@ class RideRun:
     time_s: np.ndarray
     seat_m_s2: np.ndarray
     comfort: object            # ComfortResult (Wk)
+    contact: dict | None = None  # the law rated ("linear" or "lift-off"), tension and lost contact per tire
+    axes: object = None        # ThreeAxisResult: the seat's x, y, z
 
     def to_json(self) -> dict:
-        return {"k": self.k, "c": self.c, **self.comfort.to_json()}
+        doc = {"k": self.k, "c": self.c, **self.comfort.to_json()}
+        if self.contact is not None:
+            doc["contact"] = self.contact
+        if self.axes is not None:
+            doc["three_axes"] = self.axes.to_json()
+        return doc
 
 
 def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, seat_x_m: float | None = None,
-         seat_y: float = 0.0, step_s: float = 1e-3, exposure_h: float | None = None) -> dict:
+         seat_y: float = 0.0, step_s: float = 1e-3, exposure_h: float | None = None, tires: str = "linear",
+         seat_height_m: float | None = None) -> dict:
     """Drive the tractor over `road` once per tire parameter set; the seat's Wk rating of each.
 
     Parameters
@@ -88,12 +99,22 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
         Step of the simulation, s (also the rating's sampling interval).
     exposure_h : float, optional
         Daily exposure for A(8) and the daily VDV (:func:`identification.comfort.iso2631.comfort`).
+    tires : {"linear", "auto", "lift-off"}
+        The tire law rated: the linear (bilateral) law, the law's lift-off option (unilateral), or
+        ``auto``: the lift-off law where the linear one pulls (:mod:`identification.comfort.contact`).  The
+        linear law's tension is counted in every case.
+    seat_height_m : float, optional
+        Seat height above the axles, m (default :data:`identification.comfort.seat_axes.DEFAULT_SEAT_HEIGHT_M`),
+        for the seat's fore-aft and lateral acceleration (:mod:`identification.comfort.seat_axes`).
 
     Returns
     -------
     dict of str to RideRun
-        The rating covers the ride after both axles are past the fade-in.
+        The rating covers the ride after both axles are past the fade-in; ``axes`` rates the seat's three
+        axes.
     """
+    from .contact import TIRE_MODES, episodes
+    from .seat_axes import DEFAULT_SEAT_HEIGHT_M, axis_rows, three_axis
     from ..model.kernels import run_model
     from .iso2631 import comfort
 
@@ -104,6 +125,11 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
                          f"{speed_m_s:g} m/s), got {duration_s!r}")
     if road.x_m[-1] < speed_m_s * duration_s:
         raise ValueError(f"the road ({road.x_m[-1]:g} m) is shorter than the ride ({speed_m_s * duration_s:g} m)")
+    if tires not in TIRE_MODES:
+        raise InputError("--tires", f"unknown tire law {tires!r} ({', '.join(TIRE_MODES)})")
+    height = DEFAULT_SEAT_HEIGHT_M if seat_height_m is None else float(seat_height_m)
+    rows = axis_rows(body, seat_x_m=seat_x, seat_y=seat_y, height_m=height, track_width_m=road.track_width_m)
+    J = body.matrices()[0]
     out = {}
     for name, (k, c) in sets.items():
         laws = [_point_contact(k[t], c[t], load) for t, load in zip(body.tires, body.loads_n)]
@@ -111,9 +137,22 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
                            road_right_m=road.right_m)
         traj = run_model(model, *model.grid(0.0, duration_s, step_s))
         keep = traj.time_s >= settle_s
-        seat = seat_acceleration(model, traj, seat_x_m=seat_x, seat_y=seat_y)[keep]
+        force = traj.force_n[:, keep]
+        contact = {"law": "linear", "tension": {t: episodes(force[j] < 0.0, step_s, force_n=force[j], load_n=w)
+                                                for j, (t, w) in enumerate(zip(body.tires, body.loads_n))}}
+        if tires == "lift-off" or (tires == "auto" and np.any(force < 0.0)):
+            model = ride_model(body, [dict(law, unilateral=True) for law in laws], speed_m_s=speed_m_s,
+                               road_x_m=road.x_m, road_left_m=road.left_m, road_right_m=road.right_m)
+            traj = run_model(model, *model.grid(0.0, duration_s, step_s))
+            contact["law"] = "lift-off"
+            contact["lost_contact"] = {t: episodes(traj.force_n[j, keep] <= 0.0, step_s)
+                                       for j, t in enumerate(body.tires)}
+        qdd = np.linalg.lstsq(J, np.asarray(traj.hub_accel_m_s2), rcond=None)[0][:, keep]
+        seat = rows["z"] @ qdd
         out[name] = RideRun(name, {t: float(k[t]) for t in body.tires}, {t: float(c[t]) for t in body.tires},
-                            traj.time_s[keep], seat, comfort(seat, 1.0 / step_s, "Wk", exposure_h=exposure_h))
+                            traj.time_s[keep], seat, comfort(seat, 1.0 / step_s, "Wk", exposure_h=exposure_h),
+                            contact, three_axis(rows["x"] @ qdd, rows["y"] @ qdd, seat, 1.0 / step_s,
+                                                exposure_h=exposure_h))
     return out
 
 
@@ -264,30 +303,53 @@ REPORT_RIDE = {"road_class": "B", "seed": 1, "duration_s": 60.0, "names": ("pape
 
 def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m_s: float | None = None,
                     duration_s: float = 60.0, seat_x_m: float | None = None, seat_y: float = 0.0,
-                    exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1, ssp_dir=None) -> tuple:
-    """The recording's tractor on an ISO 8608 road with each parameter set: (runs, JSON document).
+                    exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1, ssp_dir=None,
+                    realisations: int = 1, tires: str = "linear", seat_height_m: float | None = None) -> tuple:
+    """The recording's tractor on ISO 8608 roads with each parameter set: (runs, JSON document).
 
     Combines :func:`parameter_sets`, :func:`identification.comfort.road.road_profile` (grid ROAD_SPACING_M)
-    and :func:`ride`; `speed_m_s` defaults to the recording's.  The document holds the road, the speed,
-    the seat, the body and per set its k, c and rating (SI units), as ``cleatfmu ride --json`` prints it.
-    With `ssp_dir` every set's ride is also written there as an SSP 1.0 system of FMUs
+    and :func:`ride`; `speed_m_s` defaults to the recording's.  The tractor rides `realisations` roads of the
+    class, seeded by :func:`identification.comfort.expected.realisation_seeds` (`seed`'s road first).  The
+    document holds the road, the speed, the seat, the body and per set its k, c, the rating of the ride on
+    `seed`'s road and (``expected``) every rating's expected value with its intervals and the a_w from the
+    road PSD (SI units), as ``cleatfmu ride --json`` prints it.  The returned runs are those on `seed`'s
+    road.  With `ssp_dir` every set's ride on that road is also written there as an SSP 1.0 system of FMUs
     (:func:`identification.comfort.ride_ssp.write_ride_ssps`; ``doc["ssp"]``).
     """
+    from .contact import contact_summary
+    from .expected import expected_set, rating_values, realisation_seeds
     from .road import road_profile
+    from .seat_axes import DEFAULT_SEAT_HEIGHT_M, axis_rows
 
+    seeds = realisation_seeds(seed, realisations)
     speed = rec.speed_m_s if speed_m_s is None else float(speed_m_s)
     body, sets, how = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers)
-    road = road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M, seed)
-    runs = ride(body, sets, road=road, speed_m_s=speed, duration_s=duration_s, seat_x_m=seat_x_m,
-                seat_y=seat_y, exposure_h=exposure_h)
+    every = []
+    for s in seeds:
+        road_s = road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M, s)
+        every.append(ride(body, sets, road=road_s, speed_m_s=speed, duration_s=duration_s, seat_x_m=seat_x_m,
+                          seat_y=seat_y, exposure_h=exposure_h, tires=tires,
+                          seat_height_m=seat_height_m))
+        if len(every) == 1:
+            road = road_s                       # seed's own road: the runs returned, the SSP archives
+    runs = every[0]
     seat_x = SEAT_X_FRACTION * body.wheelbase_m if seat_x_m is None else float(seat_x_m)
+    height = DEFAULT_SEAT_HEIGHT_M if seat_height_m is None else float(seat_height_m)
+    rows = axis_rows(body, seat_x_m=seat_x, seat_y=seat_y, height_m=height, track_width_m=road.track_width_m)
     doc = {"recording": rec.source,
-           "road": {"class": road.road_class, "seed": int(seed), "length_m": float(road.x_m[-1]),
-                    "track_width_m": road.track_width_m, "coherence_decay": road.coherence_decay},
-           "speed_m_s": speed, "duration_s": float(duration_s), "seat": {"x_m": seat_x, "y": float(seat_y)},
+           "road": {"class": road.road_class, "seed": int(seed), "realisations": len(seeds),
+                    "length_m": float(road.x_m[-1]), "track_width_m": road.track_width_m,
+                    "coherence_decay": road.coherence_decay},
+           "speed_m_s": speed, "duration_s": float(duration_s), "tires": tires,
+           "seat": {"x_m": seat_x, "y": float(seat_y), "height_m": height, "values": FLOOR_VALUES},
            "body": {"kind": body.kind, "pitch_index": body.pitch_index, "roll_index": body.roll_index,
                     **({"pivot_index": body.pivot_index} if body.pivot else {}), "source": how},
            "sets": {name: r.to_json() for name, r in runs.items()}}
+    for name, (k, c) in sets.items():
+        per_ride = [{**rating_values(e[name].comfort), **e[name].axes.values()} for e in every]
+        doc["sets"][name]["expected"] = expected_set(per_ride, body=body, k=k, c=c, row=rows["z"], road=road,
+                                                     speed_m_s=speed, seeds=seeds, rows=rows)
+        doc["sets"][name]["expected"]["contact"] = contact_summary([e[name].contact for e in every], body.tires)
     if ssp_dir is not None:
         from .ride_ssp import write_ride_ssps
         paths = write_ride_ssps(ssp_dir, body, sets, road=road, speed_m_s=speed, duration_s=duration_s,
