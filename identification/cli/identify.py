@@ -80,6 +80,9 @@ def run(args) -> int:
     identified = {name: r for name, r in results.items() if not isinstance(r, Refusal)}
     if refused and not identified and all(r.fallback is None for r in refused):
         raise InputError(rec.source, f"channel {refused[0].tire}: {refused[0].rule}")
+    for r in [*identified.values(), *(r.fallback for r in refused if r.fallback is not None)]:
+        if r.warning() is not None:
+            print(f"cleatfmu: warning: {rec.source}: {r.warning()}", file=sys.stderr)
     if args.json:
         for r in refused:
             print(f"cleatfmu: warning: {rec.source}: {r.sentence()}", file=sys.stderr)

@@ -15,7 +15,7 @@ still refused as the recording's problem (:class:`identification.errors.InputErr
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..errors import InputError
 from .paper import identify_paper
@@ -105,7 +105,7 @@ def identify_channels(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_
     InputError
         Defective data (clipped, no impact, ...), or a cut-off not below Nyquist.
     """
-    from .waveform import identify_waveform
+    from .waveform import decay_misfit, identify_waveform
     from ..recording.window import focus, window_json
 
     if method not in ("paper", "waveform"):
@@ -135,7 +135,8 @@ def identify_channels(rec: Recording, tires=None, *, cutoff_hz: float = DEFAULT_
         mass = rec.mass_kg(tire)
         try:
             if method == "paper":
-                out[tire] = identify_paper(sig, mass, source=rec.source, window=window)
+                out[tire] = replace(identify_paper(sig, mass, source=rec.source, window=window),
+                                    decay_misfit=decay_misfit(sig, mass))
             else:
                 out[tire] = identify_waveform(sig, mass, source=rec.source, window=window)
             continue

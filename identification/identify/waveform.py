@@ -29,7 +29,7 @@ from .paper import PaperResult, identify_paper
 from ..recording.preprocess import DEFAULT_CUTOFF_HZ, TireSignal, preprocess
 from ..recording import Recording
 
-__all__ = ["WaveformResult", "fit_free_decay", "identify_waveform", "long_run_variance_ratio"]
+__all__ = ["WaveformResult", "fit_free_decay", "identify_waveform", "long_run_variance_ratio", "decay_misfit"]
 
 
 @dataclass(frozen=True)
@@ -178,7 +178,17 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
         tire=sig.tire, k=k, c=c, T=period, delta=sigma * period, zeta=sigma / math.sqrt(wn2),
         omega_n=math.sqrt(wn2), r2=r2, n_peaks=int(sig.peak_times_s.size), mass=mass_kg, decay_rate=-sigma,
         k_ci=(k - hk, k + hk), c_ci=(c - hc, c + hc), n_samples=int(sel.sum()),
-        window_s=(float(t[sel][0]), float(t[sel][-1])), variance_inflation=inflation, window=window)
+        window_s=(float(t[sel][0]), float(t[sel][-1])), variance_inflation=inflation, window=window,
+        decay_misfit=inflation)
+
+
+def decay_misfit(sig: TireSignal, mass_kg: float) -> float | None:
+    """How far a channel's free decay is from one damped mode: the long-run variance ratio of the residual of
+    its one-mode waveform fit (:func:`fit_free_decay`), or None where that fit cannot be made."""
+    try:
+        return identify_waveform(sig, mass_kg).variance_inflation
+    except (InputError, ValueError, FloatingPointError):
+        return None
 
 
 def _seeds(sig: TireSignal, mass_kg: float, source) -> tuple[float, float]:
