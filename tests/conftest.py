@@ -84,3 +84,33 @@ def rewrite_sidecar(csv_path: Path, **changes) -> None:
         else:
             meta[key] = value
     meta_path.write_text(json.dumps(meta))
+
+
+@pytest.fixture(scope="session")
+def demo_run(tmp_path_factory):
+    """``cleatfmu demo`` into a folder whose parents do not exist yet, once per test process: exit status,
+    folder, stdout (``tests/test_report.py``, ``tests/test_report_files.py``)."""
+    import contextlib
+    import io
+
+    out = tmp_path_factory.mktemp("demo") / "new" / "deeper" / "out"
+    stdout = io.StringIO()
+    with contextlib.redirect_stdout(stdout):
+        code = main(["demo", "--out", str(out), "--workers", "2"])
+    return code, out, stdout.getvalue()
+
+
+@pytest.fixture(scope="session")
+def demo(demo_run):
+    """The demo's exit status and folder."""
+    return demo_run[:2]
+
+
+def chromium() -> str:
+    """The headless browser, installed by CI's setup (``.ci/setup-debian``), never by a test; else skip."""
+    import shutil
+
+    found = shutil.which("chromium") or shutil.which("chromium-browser")
+    if not found:
+        pytest.skip("chromium is not installed (CI installs Debian's chromium with .ci/setup-debian, as root)")
+    return found

@@ -1,7 +1,6 @@
 """``cleatfmu demo`` and ``cleatfmu report``: the whole chain into a self-contained HTML report."""
 
 import base64
-import contextlib
 import io
 import json
 import os
@@ -12,26 +11,11 @@ import subprocess
 import numpy as np
 import pytest
 
+from conftest import chromium as _chromium
 from identification.rig import run_rig, write_run
 
 SECTIONS = ("recommended", "howto", "speed", "summary", "table4", "waveform", "diagnoses", "tires", "fmus",
             "timings")
-
-
-@pytest.fixture(scope="module")
-def demo_run(tmp_path_factory):
-    """``cleatfmu demo`` into a folder whose parents do not exist yet: exit status, folder, stdout."""
-    from identification.cli import main
-    out = tmp_path_factory.mktemp("demo") / "new" / "deeper" / "out"
-    stdout = io.StringIO()
-    with contextlib.redirect_stdout(stdout):
-        code = main(["demo", "--out", str(out), "--workers", "2"])
-    return code, out, stdout.getvalue()
-
-
-@pytest.fixture(scope="module")
-def demo(demo_run):
-    return demo_run[:2]
 
 
 def test_demo_creates_its_folders_and_says_what_it_wrote_and_how_to_open_it(demo_run):
@@ -43,7 +27,11 @@ def test_demo_creates_its_folders_and_says_what_it_wrote_and_how_to_open_it(demo
     wrote = {line.split(" (")[0].removeprefix("wrote ") for line in lines if line.startswith("wrote ")}
     assert wrote == {str(out / "report.html"), str(out / "summary.json"), f"{out / 'tables'}{os.sep}",
                      f"{out / 'fmu'}{os.sep}", f"{out / 'params'}{os.sep}"}
-    assert f"{out / 'fmu'}{os.sep} (16 FMUs)" in stdout and f"{out / 'tables'}{os.sep} (4 CSV tables)" in stdout
+    assert f"{out / 'fmu'}{os.sep} (8 recommended tire FMUs <recording>_<TIRE>.fmu; 8 point-contact ones of the " \
+           f"same k, c in point_contact{os.sep}; 8 not recommended in not_recommended{os.sep})" in stdout
+    assert f"{out / 'tables'}{os.sep} (4 CSV tables)" in stdout
+    assert f"{out / 'params'}{os.sep} (2 recommended parameter files <recording>.json; 8 not recommended in " \
+           f"not_recommended{os.sep})" in stdout
     assert lines[-1] == f"open the report in a web browser: {(out / 'report.html').resolve().as_uri()}"
 
 
@@ -114,13 +102,18 @@ def test_demo_tables_are_downloadable_and_say_what_the_report_says(demo):
 def test_demo_fmus_are_valid_and_listed(demo):
     from fmpy.validation import validate_fmu
     code, out = demo
-    fmus = sorted((out / "fmu").glob("*.fmu"))
-    # one point-contact and one extended FMU per tire: the joint diagnosis builds no partner duplicates
-    assert len(fmus) == 16
+    fmus = sorted((out / "fmu").rglob("*.fmu"))
+    # per tire: the recommended extended FMU, a point-contact one of the same k, c, and the one-corner fit's
+    # (not recommended): the joint diagnosis builds no partner duplicates
+    assert len(fmus) == 24
+    assert sorted(p.relative_to(out / "fmu").parent.as_posix() for p in fmus) == \
+        ["."] * 8 + ["not_recommended/waveform"] * 8 + ["point_contact"] * 8
     summary = json.loads((out / "summary.json").read_text())
     listed = [f["file"] for r in summary["recordings"]
               for f in r["diagnosis_fmus"] + [g for t in r["tires"].values() for g in t["fmus"]]]
-    assert sorted(listed) == sorted(f"fmu/{p.name}" for p in fmus)
+    assert sorted(listed) == sorted(p.relative_to(out).as_posix() for p in fmus)
+    recommended = {f["file"] for r in summary["recordings"] for f in r["diagnosis_fmus"] if f["recommended"]}
+    assert recommended == {p.relative_to(out).as_posix() for p in fmus if "not_recommended" not in p.parts}
     for path in fmus:
         assert validate_fmu(str(path)) == [], path.name
         assert "binaries/win64/" in "".join(__import__("zipfile").ZipFile(path).namelist()), path.name
@@ -160,14 +153,6 @@ def test_demo_recommends_one_joint_k_c_per_tire_within_the_truth(demo):
         assert ride["sets"]["final"]["k"] == {t: r["tires"][t]["recommended"]["k"] for t in r["tires"]}
         assert all(s["a_w"] > 0 and s["vdv"] > 0 for s in ride["sets"].values())
         assert f'{ride["sets"]["final"]["a_w"]:.3f}' in html
-
-
-def _chromium():
-    """The headless browser, installed by CI's setup (``.ci/setup-debian``), never by a test; else skip."""
-    found = shutil.which("chromium") or shutil.which("chromium-browser")
-    if not found:
-        pytest.skip("chromium is not installed (CI installs Debian's chromium with .ci/setup-debian, as root)")
-    return found
 
 
 def test_report_renders_in_headless_chromium(demo, tmp_path):
@@ -331,3 +316,4 @@ def test_the_summary_shows_what_conditioning_and_diagnosis_warned_of():
     rows = html.split("<tr>")[2:]
     assert all(f"warning: {w.replace('<', '&lt;').replace('>', '&gt;')}" in rows[0] for w in warned)
     assert "warning" not in rows[1]
+

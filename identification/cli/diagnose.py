@@ -9,6 +9,7 @@ import time
 from .util import (add_example_option, announce_compilation, check_folder, check_output, choose_tire,
                        read_recording_arg, write_files)
 from ..errors import InputError
+from ..diagnose.joint_evidence import interval_text
 from ..diagnose.run import diagnosis_warnings, run_tractor_diagnosis
 from .._files import json_text
 
@@ -82,21 +83,22 @@ def _tractor_text(diag, gain, verbose: bool = False) -> str:
         lines.append(f"  {effect}: {diag.evidence.get(effect, '')}")
     for name in ("pitch_index", "roll_index"):
         if body[name]:
-            lo, hi = body[name]["ci"]
-            lines.append(f"  {name:<12} {body[name]['value']:.3f} ({lo:.3f}-{hi:.3f})")
+            lines.append(f"  {name:<12} {interval_text(body[name]['value'], *body[name]['ci'])}")
     speed = body["speed_m_s"]
     lines.append(f"  front axle   {body['front_axle']}; speed {speed['sidecar'] * 3.6:.2f} km/h (sidecar)"
                  + (f", {speed['from_delay'] * 3.6:.2f} km/h from the front/rear delay" if speed["from_delay"] else ""))
     for tire, t in doc["tires"].items():
         left = t["unexplained"]
-        flag = (f"UNEXPLAINED {left['share']:.1%} of the signal in {left['window'][0]:.3f}-{left['window'][1]:.3f} s"
-                if left else "residual at the noise floor")
+        flag = (f"above the noise floor: residual {left['residual_to_noise']:.1f}x the noise, "
+                f"{100 * left['share']:.2g} % of the signal energy left, in {left['window'][0]:.3f}-"
+                f"{left['window'][1]:.3f} s" if left else "residual at the noise floor")
         lines.append(f"  {tire}: k {t['k'] / 1e3:.1f} kN/m {_interval(t['k'], t['k_ci'], 1e3, '.1f')}  "
                      f"c {t['c'] / 1e3:.3f} kN s/m {_interval(t['c'], t['c_ci'], 1e3, '.3f')}  "
                      f"NRMSE {t['nrmse_before']:.1%} -> {t['nrmse_after']:.1%} (noise {t['noise_nrmse']:.1%}): {flag}")
     lines.append(f"  95 % intervals: {doc['intervals']}")
     check = "the final model's FMUs cannot start (see the warning)" if gain.agreement is None else \
-        f"agrees with the fitting model to {gain.agreement:.1e}"
+        "gives the fitting model's hub accelerations bit for bit" if gain.agreement == 0.0 else \
+        f"agrees with the fitting model to {gain.agreement:.1e} of the largest hub acceleration"
     lines.append(f"  FMU co-simulation (fmpy, one FMU per tire): {check}"
                  + (f"; {diag.seconds:.1f} s diagnosis, {gain.seconds:.1f} s FMU gain check" if verbose else ""))
     return "\n".join(lines)

@@ -37,12 +37,21 @@ def written_lines(out: Path) -> list[str]:
         folder = out / sub
         return sum(1 for _ in folder.glob(pattern)) if folder.is_dir() else 0
 
+    from ..report.files import NOT_RECOMMENDED, POINT_CONTACT, file_counts
+
+    n = file_counts(out)
     items = [f"{out / 'report.html'} (the report, self-contained)", f"{out / 'summary.json'} (every number, SI units)"]
-    for sub, pattern, what in (("tables", "*.csv", "CSV tables"), ("fmu", "*.fmu", "FMUs"),
-                               ("params", "*.json", "parameter files"), ("figures", "*.png", "linked figures")):
-        n = count(sub, pattern)
-        if n:
-            items.append(f"{out / sub}{os.sep} ({n} {what})")
+    if count("tables", "*.csv"):
+        items.append(f"{out / 'tables'}{os.sep} ({count('tables', '*.csv')} CSV tables)")
+    if n["fmu"] or n["point_contact"] or n["fmu_not_recommended"]:
+        items.append(f"{out / 'fmu'}{os.sep} ({n['fmu']} recommended tire FMUs <recording>_<TIRE>.fmu; "
+                     f"{n['point_contact']} point-contact ones of the same k, c in {POINT_CONTACT}{os.sep}; "
+                     f"{n['fmu_not_recommended']} not recommended in {NOT_RECOMMENDED}{os.sep})")
+    if n["params"] or n["params_not_recommended"]:
+        items.append(f"{out / 'params'}{os.sep} ({n['params']} recommended parameter files <recording>.json; "
+                     f"{n['params_not_recommended']} not recommended in {NOT_RECOMMENDED}{os.sep})")
+    if count("figures", "*.png"):
+        items.append(f"{out / 'figures'}{os.sep} ({count('figures', '*.png')} linked figures)")
     uri = (out / "report.html").resolve().as_uri()
     return [f"wrote {item}" for item in items] + [f"open the report in a web browser: {uri}"]
 

@@ -25,7 +25,7 @@ def add_parser(subparsers) -> None:
     """Register ``cleatfmu ride``."""
     p = subparsers.add_parser(
         "ride", help="the tractor on an ISO 8608 road with each tire parameter set: ISO 2631-1 a_w, VDV at the seat",
-        description="Diagnose a whole-tractor recording (body and tires), then drive that tractor over a random "
+        description="Diagnose a whole-tractor recording (body and tires; or take them from --body), then drive that tractor over a random "
                     "ISO 8608 road (two tracks, seeded) once per tire parameter set (--compare) and rate the seat's "
                     "vertical acceleration by ISO 2631-1 (Wk): weighted RMS a_w, VDV, MTVV, crest factor, and the "
                     "daily exposure A(8) against EU directive 2002/44/EC.")
@@ -37,9 +37,12 @@ def add_parser(subparsers) -> None:
     p.add_argument("--compare", default=DEFAULT_COMPARE,
                    help="parameter sets, comma-separated: paper, waveform, final, static=K (K in N/m, or a "
                         "compression test CSV as for the static command), fmu=DIR (the k, c of the four tire "
-                        "FMUs in DIR, *_FL.fmu .. *_RR.fmu, as exported), params=FILE (the k, c of an "
+                        "FMUs in DIR, *_FL.fmu .. *_RR.fmu, as exported; in a report's fmu/ the recording's), params=FILE (the k, c of an "
                         "'identify --json' file of the four tires); "
                         f"default {DEFAULT_COMPARE})")
+    p.add_argument("--body", metavar="DIAG.json", default=None,
+                   help="take the body and the final k, c from a 'cleatfmu diagnose --json' document or a report's "
+                        "summary.json (its entry of the recording) instead of diagnosing the recording")
     p.add_argument("--seed", type=int, default=1,
                    help="seed of the first road; the other realisations' seeds are derived from it (default 1)")
     p.add_argument("--realisations", type=int, default=None,
@@ -98,7 +101,9 @@ def _check(args) -> list:
         raise InputError("--workers", f"at least 1, got {args.workers}")
     from ..comfort.ride import check_set_names
 
-    return check_set_names(args.compare.split(","))
+    from .util import recording_name_arg
+
+    return check_set_names(args.compare.split(","), recording=recording_name_arg(args))
 
 
 def run(args) -> int:
@@ -122,7 +127,7 @@ def run(args) -> int:
                                 duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
                                 exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp,
                                 realisations=args.realisations, tires=args.tires,
-                                seat_height_m=args.seat_height_m)
+                                seat_height_m=args.seat_height_m, body_doc=args.body)
     speed, seat_x, how = doc["speed_m_s"], doc["seat"]["x_m"], doc["body"]["source"]
     for name, entry in doc["sets"].items():
         if entry["expected"]["contact"]["warning"]:

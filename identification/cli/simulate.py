@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .util import add_example_option, check_output, choose_tire, read_recording_arg
+from .util import add_example_option, check_output, choose_tire, read_recording_arg, recording_name_arg
 from ..errors import InputError
 from .._files import json_text
 
@@ -135,7 +135,7 @@ def _run_tractor(args) -> int:
         raise InputError("--tire", "the whole-tractor form compares all four channels; --tire is for one FMU")
     if args.method is not None:
         raise InputError("--method", "re-identification applies to one FMU, not to the whole-tractor form")
-    paths = tractor_fmu_paths(args.fmu)
+    paths = tractor_fmu_paths(args.fmu, recording=recording_name_arg(args))
     if args.body is None:
         raise InputError("--body", "the whole-tractor form (four FMUs or a directory) needs the body and the "
                                    "arrivals: give --body DIAG.json, a 'cleatfmu diagnose REC.csv --json' document")
@@ -192,7 +192,7 @@ def add_parser(subparsers) -> None:
                     "sample the hub acceleration on the recording's time base, and report NRMSE, R2, re-identified "
                     "k and c, decay rates and where (impact, free decay, other axle) the simulation is wrong.  "
                     "Four FMUs (FL FR RL RR, or a directory holding *_FL.fmu .. *_RR.fmu as 'diagnose --fmu-dir' "
-                    "writes them) with --body DIAG.json: run them under the body of a whole-tractor diagnosis "
+                    "writes them, or a report's fmu/ whose <recording>_FL.fmu .. are taken) with --body DIAG.json: run them under the body of a whole-tractor diagnosis "
                     "('diagnose --json') and report, per channel, the NRMSE against the measurement, the noise-only "
                     "NRMSE and their ratio.  The recording is the last path, or an embedded one with --example.")
     p.add_argument("fmu", metavar="FMU", nargs="+",
@@ -204,7 +204,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--tire", metavar="TIRE", help="one FMU: channel to compare, any letter case (required when "
                                                   "the recording has several)")
     p.add_argument("--body", metavar="DIAG.json",
-                   help="four FMUs: the body and arrivals, a 'cleatfmu diagnose REC.csv --json' document")
+                   help="four FMUs: the body and arrivals, a 'cleatfmu diagnose REC.csv --json' document or a "
+                        "report's summary.json (its entry of the recording)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.add_argument("--plot", metavar="OUT.png", help="write measured vs simulated acceleration (one FMU: with "
                                                      "decay curves; four: every channel); the folder is created "

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from .util import add_example_option, check_output, read_recording_arg, write_files
+from .util import add_example_option, check_output, read_recording_arg, recording_name_arg, write_files
 from ..errors import InputError
 from .._files import json_text
 
@@ -47,7 +47,7 @@ def run(args) -> int:
 
     fmus, recording = _inputs(args)
     args.recording = recording
-    paths = tractor_fmu_paths(fmus)
+    paths = tractor_fmu_paths(fmus, recording=recording_name_arg(args))
     check_output(args.output, ".ssp", "SSP")
     rec = read_recording_arg(args)
     model, pb, theta, paths, record, body, settings, source = tractor_from_fmus(paths, rec, args.body)
@@ -133,7 +133,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("recording", metavar="REC.csv", nargs="?", help="the recording (or --example NAME)")
     add_example_option(p, bare=False)
     p.add_argument("--body", metavar="DIAG.json", required=True,
-                   help="the 'cleatfmu diagnose REC.csv --json' document: body and arrivals")
+                   help="the 'cleatfmu diagnose REC.csv --json' document (body and arrivals), or a report's "
+                        "summary.json (its entry of the recording)")
     p.add_argument("-o", "--output", metavar="OUT.ssp", required=True, help="the SSP file to write")
     p.add_argument("--seat-x-m", type=float, default=None,
                    help="seat position behind the front axle, m (default: 0.85 wheelbase)")

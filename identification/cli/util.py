@@ -100,6 +100,21 @@ def add_example_option(parser, *, bare: bool = True) -> None:
                             help=f"use an embedded recording instead of REC.csv ({names})")
 
 
+def recording_name_arg(args) -> str | None:
+    """The name (file name without ``.csv``) of the recording a command was given, without reading it:
+    to pick that recording's files where a folder or a report summary holds several; None if unknown."""
+    from pathlib import Path
+
+    from ..recording.examples import example_path
+
+    if getattr(args, "example", None) is not None:
+        try:
+            return example_path(args.example).stem
+        except InputError:            # an unknown example: refused when the recording is read
+            return None
+    return Path(args.recording).stem if getattr(args, "recording", None) is not None else None
+
+
 def read_recording_arg(args):
     """The recording of a command: the positional ``args.recording`` or ``args.example``, exactly one of them.
 

@@ -162,7 +162,34 @@ def _point_contact(k: float, c: float, load: float) -> dict:
     return dict(tire_law.EXTENDED_DEFAULTS, stiffness=float(k), damping=float(c), static_load=float(load))
 
 
-def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
+def _documented_body(rec, body_doc, source) -> tuple:
+    """The body and the final k, c of a whole-tractor document (``diagnose --json``, or a report's
+    ``summary.json`` and its entry of `rec`): (Body, (k, c), how)."""
+    from ..fmu.simulate_inputs import body_settings, diagnosis_of, read_body_document
+    from ..recording import TIRES
+
+    source = str(source or body_doc)
+    doc = read_body_document(body_doc) if not isinstance(body_doc, dict) else body_doc
+    doc = diagnosis_of(doc, source, rec.source)
+    settings = body_settings(doc, source)
+    idx = settings["indices"]
+    try:
+        final = ({t: float(doc["tires"][t]["k"]) for t in TIRES}, {t: float(doc["tires"][t]["c"]) for t in TIRES})
+    except (KeyError, TypeError, ValueError):
+        raise InputError(source, "not a 'cleatfmu diagnose --json' whole-tractor document: tires.<TIRE>.k and "
+                                 ".c of FL, FR, RL, RR needed") from None
+    body = Body(TIRES, tuple(rec.wheel_load_N[t] for t in TIRES), rec.wheelbase_m,
+                pitch="axle_coupling" in settings["body_effects"], roll="roll_coupling" in settings["body_effects"],
+                pivot=settings["front_axle"] == "pivot", pitch_index=idx.get("pitch_index", 1.0),
+                roll_index=idx.get("roll_index", 1.0), pivot_index=idx.get("pivot_index", 0.05))
+    what = "rigid tractor" if settings["front_axle"] == "rigid" else "tractor with a pivoting front axle"
+    from pathlib import PureWindowsPath
+
+    origin = PureWindowsPath(str(settings["recording"])).name if settings["recording"] else "its recording"
+    return body, final, f"{what} of {PureWindowsPath(source).name} (diagnosed from {origin})"
+
+
+def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1, body_doc=None) -> tuple:
     """The tractor's body and tire parameter sets to ride with, from a whole-tractor recording.
 
     Parameters
@@ -175,9 +202,12 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
         test's, with the final model's c), ``fmu=DIR`` (the k and c the four tire FMUs in DIR carry),
         ``params=FILE`` (the k and c of an ``identify --json`` document of the four tires).
     diagnosis : TractorDiagnosis, optional
-        The recording's joint diagnosis (run when not given).
+        The recording's joint diagnosis (run when neither it nor `body_doc` is given).
     workers : int
         Processes of the diagnosis.
+    body_doc : dict or path-like, optional
+        A ``diagnose --json`` document or a report's ``summary.json`` (its entry of `rec`): the body and the
+        final k, c are taken from it, and no diagnosis is run.
 
     Returns
     -------
@@ -189,25 +219,28 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
     from ..diagnose.joint_timing import BODY_DEFAULTS
     from ..recording import TIRES
 
-    names = check_set_names(names)
+    names = check_set_names(names, recording=rec.source)
     missing = [t for t in TIRES if t not in rec.accel_m_s2]
     if missing:
         raise InputError(rec.source, f"a ride needs all four hubs; no channel {', '.join(missing)}")
-    diag = diagnosis or diagnose_tractor(rec, workers=workers)
-    theta = diag.final.params
-    body = diag.final.model.body(theta)
-    how = "diagnosed " + ("rigid tractor" if body.kind == "rigid" else "tractor with a pivoting front axle")
+    if body_doc is not None and diagnosis is None:
+        body, final, how = _documented_body(rec, body_doc, None)
+    else:
+        diag = diagnosis or diagnose_tractor(rec, workers=workers)
+        theta = diag.final.params
+        body = diag.final.model.body(theta)
+        how = "diagnosed " + ("rigid tractor" if body.kind == "rigid" else "tractor with a pivoting front axle")
+        final = ({t: theta[f"k_{t}"] for t in TIRES}, {t: theta[f"c_{t}"] for t in TIRES})
     if body.kind not in ("rigid", "pivot"):
         body = Body(TIRES, tuple(rec.wheel_load_N[t] for t in TIRES), rec.wheelbase_m, pitch=True, roll=True,
                     pitch_index=BODY_DEFAULTS["pitch_index"], roll_index=BODY_DEFAULTS["roll_index"])
         how = "rigid tractor with typical indices (assumed: the diagnosis named no body coupling)"
-    final = ({t: theta[f"k_{t}"] for t in TIRES}, {t: theta[f"c_{t}"] for t in TIRES})
     sets = {}
     for name in names:
         if name == "final":
             sets[name] = final
         elif name.startswith("fmu="):
-            sets[name] = _fmu_set(name)
+            sets[name] = _fmu_set(name, recording=rec.source)
         elif name.startswith("params="):
             sets[name] = _params_set(name)
         elif name in ("paper", "waveform"):
@@ -223,8 +256,9 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1) -> tuple:
     return body, sets, how
 
 
-def check_set_names(names) -> list:
-    """The parameter-set names of :func:`parameter_sets`, checked (InputError naming ``--compare``)."""
+def check_set_names(names, *, recording=None) -> list:
+    """The parameter-set names of :func:`parameter_sets`, checked (InputError naming ``--compare``);
+    `recording` (a path or name) picks its FMUs in a folder of several recordings' (``fmu=DIR``)."""
     names = [str(n).strip() for n in names if str(n).strip()]
     if not names:
         raise InputError("--compare", "no parameter set given")
@@ -234,7 +268,7 @@ def check_set_names(names) -> list:
         if name.startswith("static="):
             _stiffness(name)
         elif name.startswith("fmu="):
-            _fmu_set(name)
+            _fmu_set(name, recording=recording)
         elif name.startswith("params="):
             _params_set(name)
         elif name not in ("paper", "waveform", "final"):
@@ -243,16 +277,20 @@ def check_set_names(names) -> list:
     return names
 
 
-def _fmu_set(name: str) -> tuple:
+def _fmu_set(name: str, *, recording=None) -> tuple:
     """(k, c) per tire of ``fmu=DIR``: the stiffness and damping the four tire FMUs in DIR carry (their
-    start values, as exported or written by ``diagnose --fmu-dir``)."""
+    start values, as exported or written by ``diagnose --fmu-dir``); in a report's ``fmu/``, those of
+    `recording` (path or name)."""
+    from pathlib import PureWindowsPath
+
     from fmpy import read_model_description
 
     from ..recording import TIRES
     from ..fmu.simulate_inputs import tractor_fmu_paths
 
     folder = name.split("=", 1)[1]
-    paths = tractor_fmu_paths(folder)
+    stem = None if recording is None else PureWindowsPath(str(recording)).name.removesuffix(".csv")
+    paths = tractor_fmu_paths(folder, recording=stem)
     k, c = {}, {}
     for t in TIRES:
         try:
@@ -304,11 +342,12 @@ REPORT_RIDE = {"road_class": "B", "seed": 1, "duration_s": 60.0, "names": ("pape
 def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m_s: float | None = None,
                     duration_s: float = 60.0, seat_x_m: float | None = None, seat_y: float = 0.0,
                     exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1, ssp_dir=None,
-                    realisations: int = 1, tires: str = "linear", seat_height_m: float | None = None) -> tuple:
+                    realisations: int = 1, tires: str = "linear", seat_height_m: float | None = None,
+                    body_doc=None) -> tuple:
     """The recording's tractor on ISO 8608 roads with each parameter set: (runs, JSON document).
 
     Combines :func:`parameter_sets`, :func:`identification.comfort.road.road_profile` (grid ROAD_SPACING_M)
-    and :func:`ride`; `speed_m_s` defaults to the recording's.  The tractor rides `realisations` roads of the
+    and :func:`ride`; `speed_m_s` defaults to the recording's; `body_doc` as for :func:`parameter_sets`.  The tractor rides `realisations` roads of the
     class, seeded by :func:`identification.comfort.expected.realisation_seeds` (`seed`'s road first).  The
     document holds the road, the speed, the seat, the body and per set its k, c, the rating of the ride on
     `seed`'s road and (``expected``) every rating's expected value with its intervals and the a_w from the
@@ -323,7 +362,7 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
 
     seeds = realisation_seeds(seed, realisations)
     speed = rec.speed_m_s if speed_m_s is None else float(speed_m_s)
-    body, sets, how = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers)
+    body, sets, how = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers, body_doc=body_doc)
     every = []
     for s in seeds:
         road_s = road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M, s)

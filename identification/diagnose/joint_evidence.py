@@ -34,12 +34,36 @@ from ..recording.condition import ENGINE_BAND_HZ
 from ..recording import FRONT_TIRES, STANDARD_GRAVITY
 from .joint_fit import TractorFit
 
-__all__ = ["check_tractor", "contact_losses"]
+__all__ = ["check_tractor", "final_evidence", "contact_losses", "interval_text"]
+
+
+def interval_text(value: float, lo: float, hi: float, decimals: int = 3, *, sep: str = "-") -> str:
+    """``value (lo-hi)`` with at least `decimals` decimals and as many more (up to 9) as it takes for the
+    ends of a non-empty interval to differ in print (never ``0.800 (0.800-0.800)``).
+
+    Parameters
+    ----------
+    value, lo, hi : float
+        The estimate and its interval.
+    decimals : int
+        Fewest decimals.
+    sep : str
+        Between the ends.
+    """
+    d = decimals
+    if all(map(math.isfinite, (lo, hi))) and hi > lo:
+        while d < 9 and f"{lo:.{d}f}" == f"{hi:.{d}f}":
+            d += 1
+    return f"{value:.{d}f} ({lo:.{d}f}{sep}{hi:.{d}f})"
 
 
 def _ci(fit: TractorFit, name: str, fmt: str, unit: str = "") -> str:
     lo, hi = fit.ci[name]
     u = f" {unit}" if unit else ""
+    if fmt.endswith("f") and fmt[1:-1].isdigit() and lo is not None and hi is not None:
+        text = interval_text(fit.params[name], lo, hi, int(fmt[1:-1]))
+        value, rest = text.split(" ", 1)
+        return f"{value}{u} {rest}"
     return f"{format(fit.params[name], fmt)}{u} ({format(lo, fmt)}-{format(hi, fmt)})"
 
 
@@ -242,6 +266,28 @@ def _periodic(fit, base):
 _CHECKS = {"enveloping": _enveloping, "lift_off": _lift_off, "axle_coupling": _axle, "roll_coupling": _roll,
            "front_axle_pivot": _pivot, "nonlinear_stiffness": _nonlinear, "friction_damping": _friction,
            "periodic_disturbance": _periodic}
+
+
+def final_evidence(final, bases: dict, screened: dict) -> dict:
+    """Each named effect's evidence sentence in the final fit's numbers (those the diagnosis reports, so
+    that an index reads the same in the evidence as in the body), against the model it extended.
+
+    Parameters
+    ----------
+    final : TractorFit
+        The named model's final fit.
+    bases : dict
+        Effect -> the fit of the model it extended.
+    screened : dict
+        Effect -> the screening fit's sentence, kept where the check cannot run on the final fit.
+    """
+    out = {}
+    for effect, text in screened.items():
+        try:
+            out[effect] = check_tractor(effect, final, bases[effect])[1]
+        except (KeyError, ValueError, ArithmeticError):
+            out[effect] = text
+    return out
 
 
 def check_tractor(effect: str, fit: TractorFit, base: TractorFit) -> tuple[bool, str]:

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..recording import FRONT_TIRES
 from ..workers import one_blas_thread
-from .joint_evidence import check_tractor
+from .joint_evidence import check_tractor, final_evidence
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
 from .joint_start import (ENVELOPE_GUESS_M, body_start, enveloped_timings, periodic_start, refine_timing,
                           rescue_start, starting_values)
@@ -357,7 +357,7 @@ def _select(pb: TractorProblem, start0: dict, effects, pool, tick, n: int, n_eff
     base_model = TractorFitModel((), pb)
     baseline = fit_tractor(base_model, refine_timing(base_model, {n_: start0[n_] for n_ in base_model.names}),
                            budget=FINAL_BUDGET)
-    current, selected, rounds, evidence = baseline, [], [], {}
+    current, selected, rounds, evidence, bases = baseline, [], [], {}, {}
     while len(selected) < MAX_EFFECTS:
         tries = [(e,) for e in effects if e not in selected and pb.available(e, selected)]
         if ("axle_coupling",) in tries and ("roll_coupling",) in tries and len(pb.channels) == 4:
@@ -383,6 +383,7 @@ def _select(pb: TractorProblem, start0: dict, effects, pool, tick, n: int, n_eff
         if best is None:
             break
         tick(f"refit {best.fit.label}")
+        bases.update({effect: current for effect in best.evidence})   # the model each effect extended
         current = fit_tractor(best.fit.model, refine_timing(best.fit.model, best.fit.params),
                               budget=FINAL_BUDGET)
         selected += best.effect.split("+")
@@ -394,5 +395,6 @@ def _select(pb: TractorProblem, start0: dict, effects, pool, tick, n: int, n_eff
     else:   # the named model once more from its optimum, with the grid step checked
         current = fit_tractor(current.model, current.params, budget=FINAL_BUDGET, step_check=True)
     left = {c: unexplained(pb, current.prediction, c) for c in pb.channels}
+    evidence = final_evidence(current, bases, evidence)
     return {"baseline": baseline, "final": current, "selected": selected, "rounds": rounds,
             "evidence": evidence, "unexplained": left}

@@ -149,6 +149,26 @@ class TireFmu:
             values.update(zip(flags, (bool(b) for b in self.slave.getBoolean([self.vr[n] for n in flags]))))
         return values
 
+    def set_start_values(self, values: dict) -> None:
+        """Set parameters (name -> value) for the next :meth:`initialize`; names the FMU lacks are left out."""
+        self._start_values.update({n: v for n, v in values.items() if n in self.vr})
+
+    def envelops_test_cleat(self) -> bool:
+        """A tire with a footprint and its built-in cleat off (as exported): it rides a cleat only as its
+        built-in one (after initialize)."""
+        p = self.parameters()
+        return self.longitudinal and p.get("footprint_length", 0.0) > 0.0 and p.get("cleat_height", 0.0) == 0.0
+
+    def switch_on_test_cleat(self, t0: float, *, height_m: float, width_m: float, profile=None) -> bool:
+        """If :meth:`envelops_test_cleat`, set the test's cleat (`profile`'s bevel) as the built-in one and
+        initialize again at `t0` (exported FMUs start with it off, for a ride model's road); whether it did."""
+        if not (height_m > 0 and self.envelops_test_cleat()):
+            return False
+        bevel = 0.0 if profile is None else float(profile.builtin_bevel_m)
+        self.set_start_values({"cleat_height": height_m, "cleat_width": width_m, "cleat_bevel": bevel})
+        self.initialize(t0)
+        return True
+
     def builtin_cleat(self) -> bool:
         """The tire knows the cleat itself (a built-in cleat): pass a flat road and x (after initialize)."""
         return self.longitudinal and self.parameters().get("cleat_height", 0.0) > 0.0
@@ -300,6 +320,7 @@ def run_quarter_tractor(fmu_path, *, mass_kg: float, speed_m_s: float, cleat_hei
                              max_step_s=step_s or max_step_s, vertex_fractions=vertices)
     with TireFmu(fmu_path, start_values=start_values) as tire:
         tire.initialize(start)
+        tire.switch_on_test_cleat(start, height_m=cleat_height_m, width_m=cleat_width_m, profile=cleat_profile)
         params = tire.parameters()
         inputs = tire.inputs(n, start, h, arrival_s=arrival_s, speed_m_s=speed_m_s, cleat_height_m=cleat_height_m,
                              cleat_width_m=cleat_width_m, profile=cleat_profile)
@@ -339,6 +360,7 @@ def run_half_tractor_fmus(fmu_paths, *, loads_n, wheelbase_m: float, dynamic_ind
         tires = (front, rear)
         for t in tires:
             t.initialize(start)
+            t.switch_on_test_cleat(start, height_m=cleat_height_m, width_m=cleat_width_m, profile=cleat_profile)
         params = [t.parameters() for t in tires]
         inputs = [t.inputs(n, start, h, arrival_s=arrival_s + lag, speed_m_s=speed_m_s,
                            cleat_height_m=cleat_height_m, cleat_width_m=cleat_width_m, profile=cleat_profile)

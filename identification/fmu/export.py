@@ -143,7 +143,10 @@ def read_identified(path, tire: str | None = None, *, accept_out_of_range: bool 
 
 
 def _method(entry: dict) -> str:
-    """Identification method of an ``identify`` entry: the waveform fit carries confidence intervals."""
+    """Identification method of an ``identify`` entry: the one it names (a report's recommended entry says
+    ``"joint diagnosis"``), else the waveform fit, which carries confidence intervals, or the paper's."""
+    if isinstance(entry.get("method"), str) and entry["method"].strip():
+        return entry["method"].strip()
     return "waveform" if "k_ci" in entry else "paper"
 
 

@@ -2,7 +2,8 @@
 
 :func:`tractor_fmu_paths` matches the FMU files to the tires;
 :func:`read_body_document` reads a ``cleatfmu diagnose --json`` whole-tractor
-document and :func:`body_settings` takes from it (validated) the body, the
+document (or a report's ``summary.json``, whose recording :func:`diagnosis_of` picks) and
+:func:`body_settings` takes from it (validated) the body, the
 effects and each tire's cleat arrival, for
 :func:`identification.fmu.tractor_cosim.simulate_tractor`.
 """
@@ -15,7 +16,7 @@ from pathlib import Path
 from ..errors import InputError
 from ..recording import TIRES
 
-__all__ = ["tractor_fmu_paths", "read_body_document", "body_settings"]
+__all__ = ["tractor_fmu_paths", "read_body_document", "diagnosis_of", "body_settings"]
 
 
 def _tire_suffix(path: Path):
@@ -24,19 +25,32 @@ def _tire_suffix(path: Path):
     return next((t for t in TIRES if name.endswith(f"_{t}.fmu")), None)
 
 
-def tractor_fmu_paths(paths) -> dict:
+def tractor_fmu_paths(paths, *, recording: str | None = None) -> dict:
     """The FMU of each tire, {FL, FR, RL, RR: Path}, from one directory or four paths.
 
     A directory must hold exactly one ``*_FL.fmu``, ``*_FR.fmu``, ``*_RL.fmu``
-    and ``*_RR.fmu`` (as ``cleatfmu diagnose --fmu-dir`` writes them).  Four
-    paths are matched by the same suffixes when each tire's is there once,
-    else taken in FL, FR, RL, RR order (a path whose suffix names another
-    tire than its place is refused).
+    and ``*_RR.fmu`` (as ``cleatfmu diagnose --fmu-dir`` writes them), or,
+    when it holds those of several recordings (a report's ``fmu/``), the
+    ``<recording>_FL.fmu`` .. ``<recording>_RR.fmu`` of the `recording` named
+    (the recording's file name without ``.csv``).  Four paths are matched by
+    the same suffixes when each tire's is there once, else taken in FL, FR,
+    RL, RR order (a path whose suffix names another tire than its place is
+    refused).
     """
     paths = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
     if len(paths) == 1 and paths[0].is_dir():
         folder = paths[0]
         found = {t: sorted(p.name for p in folder.glob(f"*_{t}.fmu") if p.is_file()) for t in TIRES}
+        if any(len(found[t]) > 1 for t in TIRES):
+            own = {t: f"{recording}_{t}.fmu" for t in TIRES} if recording else {}
+            if own and all(own[t] in found[t] for t in TIRES):
+                return {t: folder / own[t] for t in TIRES}
+            stems = sorted({name[:-len(f"_{t}.fmu")] for t in TIRES for name in found[t]})
+            if all(any(f"{s}_{t}.fmu" in found[t] for s in stems) for t in TIRES) and len(stems) > 1:
+                which = f"none is {recording!r}" if recording else "name the recording"
+                raise InputError(folder, f"holds the tire FMUs of {len(stems)} recordings ({', '.join(stems)}): "
+                                         f"{which}; give the recording of one of them (REC.csv or --example), "
+                                         f"or its four FMUs")
         missing = [f"*_{t}.fmu" for t in TIRES if not found[t]]
         several = [f"{len(found[t])} *_{t}.fmu ({', '.join(found[t])})" for t in TIRES if len(found[t]) > 1]
         if missing or several:
@@ -83,6 +97,47 @@ def read_body_document(source) -> dict:
     if not isinstance(doc, dict):
         raise InputError(source, "not a 'cleatfmu diagnose --json' whole-tractor document (not a JSON object)")
     return doc
+
+
+def diagnosis_of(doc: dict, source, recording=None) -> dict:
+    """The whole-tractor document of `recording` in `doc`: `doc` itself (a ``diagnose --json`` document),
+    or, from a report's ``summary.json``, the diagnosis of the recording of the same name.
+
+    Parameters
+    ----------
+    doc : dict
+        A ``cleatfmu diagnose --json`` document or a report's ``summary.json``.
+    source : str
+        The document's name in messages.
+    recording : path-like, optional
+        The recording simulated (its file name without ``.csv`` picks the summary's entry).
+
+    Raises
+    ------
+    InputError
+        A summary without a diagnosed recording, or of several none of which is `recording` (one line
+        naming them).
+    """
+    if not isinstance(doc.get("recordings"), list):
+        return doc
+    entries = [r for r in doc["recordings"] if isinstance(r, dict) and isinstance(r.get("diagnosis"), dict)]
+    names = [_stem(r.get("source")) for r in entries]
+    if not entries:
+        raise InputError(source, "a report summary without a diagnosed recording: no body to take")
+    want = _stem(recording) if recording is not None else None
+    match = [e for e, n in zip(entries, names) if n == want]
+    if len(match) == 1 or len(entries) == 1:
+        return (match or entries)[0]["diagnosis"]
+    raise InputError(source, f"a report summary of {len(entries)} diagnosed recordings ({', '.join(names)}), "
+                             f"none of them {want!r}: give the recording of one of them (REC.csv or --example)")
+
+
+def _stem(path) -> str:
+    """A recording's name: its file name without ``.csv`` (either path style)."""
+    from pathlib import PureWindowsPath
+
+    name = PureWindowsPath(str(path)).name
+    return name[:-4] if name.lower().endswith(".csv") else name
 
 
 def body_settings(doc: dict, source) -> dict:

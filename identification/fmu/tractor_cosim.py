@@ -34,10 +34,10 @@ from ..model.fitting import UNEXPLAINED_RATIO
 from ..recording.preprocess import DEFAULT_CUTOFF_HZ
 from ..recording import TIRES
 from ..model.scheme import Trajectory, _equilibrium_corner
-from .simulate_inputs import body_settings, read_body_document, tractor_fmu_paths
+from .simulate_inputs import body_settings, diagnosis_of, read_body_document, tractor_fmu_paths
 
 __all__ = ["run_tractor_fmus", "step_body_fmus", "TractorGain", "measure_tractor_gain", "build_tractor_fmus",
-           "TractorSimulation", "simulate_tractor", "tractor_from_fmus", "UNEXPLAINED_RATIO"]
+           "TractorSimulation", "simulate_tractor", "tractor_from_fmus", "UNEXPLAINED_RATIO", "CLEAT_PARAMETERS"]
 
 
 def run_tractor_fmus(fmus, record: TractorModel, *, start_s: float, step_s: float, n: int) -> Trajectory:
@@ -47,11 +47,15 @@ def run_tractor_fmus(fmus, record: TractorModel, *, start_s: float, step_s: floa
     open :class:`~identification.fmu.cosim.TireFmu` instances (initialized afresh
     at `start_s` here, left open).  The FMUs carry their own parameters (an
     extended tire FMU with a built-in cleat places the cleat itself from the
-    hub's longitudinal position).
+    hub's longitudinal position).  A tire with longitudinal inputs gets the built-in cleat of its law in the
+    record (:data:`CLEAT_PARAMETERS`) set explicitly before it starts: the exported FMUs start with
+    ``cleat_height`` 0.
     """
     fmus = [f if isinstance(f, TireFmu) else Path(f) for f in fmus]
     if len(fmus) != len(record.tires):
         raise ValueError(f"one FMU per tire is needed ({len(record.tires)}), got {len(fmus)}")
+    cleats = [{n: record.laws[i][n] for n in CLEAT_PARAMETERS if n in record.laws[i]}
+              for i in range(len(record.tires))]
     J, mass, _ = record.body.matrices()
     inputs = record.inputs(start_s, step_s, n)
     loads = np.array([p["static_load"] for p in record.laws], dtype=float)
@@ -60,6 +64,8 @@ def run_tractor_fmus(fmus, record: TractorModel, *, start_s: float, step_s: floa
                  for f, name in zip(fmus, record.tires)]
         static = []
         for i, tire in enumerate(tires):
+            if tire.longitudinal:     # the record's built-in cleat, set explicitly: exported FMUs start with it off
+                tire.set_start_values(cleats[i])
             tire.initialize(start_s)
             params = tire.parameters()
             force, x0 = tire.force_fn(), float(inputs.hub_x[i, 0])
@@ -73,8 +79,17 @@ def run_tractor_fmus(fmus, record: TractorModel, *, start_s: float, step_s: floa
     return traj
 
 
+#: The parameters of an extended tire's built-in cleat, which the co-simulations set explicitly.
+CLEAT_PARAMETERS = ("cleat_height", "cleat_width", "cleat_x", "cleat_bevel")
+
+
 def build_tractor_fmus(fit, directory, stem: str, *, description_prefix: str = "") -> list[Path]:
-    """Build one extended tire FMU per wheel of a fitted whole-tractor model: ``DIR/<stem>_<TIRE>.fmu``."""
+    """Build one extended tire FMU per wheel of a fitted whole-tractor model: ``DIR/<stem>_<TIRE>.fmu``.
+
+    The built-in cleat (the test's, for a tire that envelops it) is off in the FMU: ``cleat_height`` starts
+    at 0, so that a ride model gets the plain road; its width, position and bevel are kept, and the
+    model description names the height to set for a run over the test's cleat.
+    """
     from build_scripts import build_fmu
 
     model, params = fit.model, fit.params
@@ -84,12 +99,16 @@ def build_tractor_fmus(fit, directory, stem: str, *, description_prefix: str = "
     effects = sorted(e for e in model.effects)
     for tire in model.problem.channels:
         law = model.law(params, tire)
+        test_cleat = law["cleat_height"]
+        law = {**law, "cleat_height": 0.0}
         path = directory / f"{stem}_{tire}.fmu"
         text = (f"{description_prefix}Extended tire {tire} identified jointly with the whole tractor from cleat "
                 f"recording '{Path(rec.source).name}' at {rec.speed_kmh:.4g} km/h; effects: "
                 f"{', '.join(effects) or 'none'}. Parameters: "
                 + "; ".join(f"{k} = {v}" if isinstance(v, bool) else f"{k} = {v:.6g}" for k, v in law.items())
-                + " (SI units).")
+                + " (SI units)."
+                + (f" The built-in test cleat is off (cleat_height 0): set cleat_height = {test_cleat:.6g} m to "
+                   f"ride the test's cleat through hub_x." if test_cleat > 0 else ""))
         build_fmu("extended_tire", path, start_values=law, description=text, backend="native",
                   provenance={"command": "cleatfmu diagnose", "tire": tire, "effects": effects,
                               "recording": Path(rec.source).name})
@@ -178,13 +197,16 @@ def measure_tractor_gain(diag, fmu_dir=None, *, stem: str | None = None, strict:
 # ---------------------------------------------------------------------------------------------------------------
 # cleatfmu simulate FL.fmu FR.fmu RL.fmu RR.fmu REC.csv --body DIAG.json
 
-def _fmu_law(fmu: TireFmu, static_load: float) -> dict:
+def _fmu_law(fmu: TireFmu, rec, tire: str) -> dict:
     """The extended tire law an open FMU carries, as the model record needs it (cleat handling, lugs, static
     load); the FMU is left initialized at t = 0 (the run initializes it afresh).
 
     Parameters the FMU does not have keep the law's defaults; a tire without
     the longitudinal inputs cannot place a cleat itself, so it gets the road.
-    The static load is the body's (the recording's wheel load).
+    A tire with a footprint whose built-in cleat is off (as exported) envelops
+    the recording's cleat as its built-in one (height, width and bevel of the
+    recording's; the run sets them).  The static load is the body's (the
+    recording's wheel load).
     """
     from ..model.tire_law import EXTENDED_DEFAULTS
 
@@ -193,7 +215,10 @@ def _fmu_law(fmu: TireFmu, static_load: float) -> dict:
     law.update({k: v for k, v in fmu.parameters().items() if k in EXTENDED_DEFAULTS})
     if not fmu.longitudinal:
         law["cleat_height"] = 0.0
-    law["static_load"] = float(static_load)
+    elif fmu.envelops_test_cleat():
+        law.update(cleat_height=float(rec.cleat_height_m), cleat_width=float(rec.cleat_width_m),
+                   cleat_bevel=0.0 if rec.cleat_profile is None else float(rec.cleat_profile.builtin_bevel_m))
+    law["static_load"] = float(rec.wheel_load_N[tire])
     return law
 
 
@@ -292,8 +317,9 @@ def tractor_from_fmus(fmu_paths, rec, body_doc, *, cutoff_hz: float = DEFAULT_CU
         body_source = body_source or str(body_doc)
         body_doc = read_body_document(body_doc)
     source = body_source or "--body"
-    settings = body_settings(body_doc, source)
-    paths = fmu_paths if isinstance(fmu_paths, dict) else tractor_fmu_paths(fmu_paths)
+    settings = body_settings(diagnosis_of(body_doc, source, rec.source), source)
+    paths = fmu_paths if isinstance(fmu_paths, dict) else \
+        tractor_fmu_paths(fmu_paths, recording=Path(rec.source).stem)
     if sorted(paths) != sorted(TIRES):
         raise InputError(None, f"one FMU per tire FL, FR, RL, RR is needed, got {', '.join(paths) or 'none'}")
     paths = {t: Path(paths[t]) for t in TIRES}
@@ -313,7 +339,7 @@ def tractor_from_fmus(fmu_paths, rec, body_doc, *, cutoff_hz: float = DEFAULT_CU
     laws = []
     for t in pb.channels:   # each FMU's law
         with TireFmu(paths[t], instance_name=t) as tire:
-            laws.append(_fmu_law(tire, rec.wheel_load_N[t]))
+            laws.append(_fmu_law(tire, rec, t))
     record = TractorModel(body=body, laws=tuple(laws),
                           cleat=Cleat.of(rec),
                           arrivals_s=tuple(settings["arrivals"][t] for t in pb.channels))

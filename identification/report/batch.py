@@ -4,13 +4,15 @@ One job per tire and one per recording, spread over the machine's cores:
 
 1. **identify** (per tire) - the paper's method and the waveform fit (k, c with 95 % intervals);
 2. **export** (per tire) - the point-contact tire FMU (native C) with the waveform values (the paper's if
-   the fit fails);
+   the fit fails): one corner alone, so not recommended (``fmu/not_recommended/<method>/``);
 3. **co-simulate** (per tire) - the FMU under the corner mass over the recording's cleat, against the
    measurement;
 4. **diagnose** (per recording) - every channel fitted jointly under one body
    (:func:`~identification.diagnose.joint_select.diagnose_tractor`): the effects the four-corner model
-   misses, one recommended k, c per tire, what is still unexplained, one extended tire FMU per wheel,
-   and the gain measured by co-simulating them under the body with fmpy;
+   misses, one recommended k, c per tire, what is still unexplained, one extended tire FMU per wheel
+   (``fmu/<recording>_<TIRE>.fmu``: the recommended file), the gain measured by co-simulating them under
+   the body with fmpy, and the recommended k, c as parameters (``params/<recording>.json``) and as plain
+   spring-damper FMUs (``fmu/point_contact/``; :mod:`~identification.report.files`);
 5. **figures and FMU validation** - the paper's Figure 9a/9b, the overlays, and
    ``fmpy.validation.validate_fmu`` of every FMU written.
 
@@ -27,6 +29,8 @@ from pathlib import Path
 
 from .._files import atomic_write_texts, json_text
 from ..errors import InputError
+from .files import (FIGURES_STAGING, FOLDERS, not_recommended_fmu, not_recommended_params, remove_staging,
+                    write_recommended_files)
 
 __all__ = ["TireReport", "DiagnosisReport", "RecordingReport", "BatchResult", "collect_recordings", "run_batch", "STAGES"]
 
@@ -147,7 +151,6 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
     from ..recording.window import focus, window_json
 
     rep = TireReport(recording=stem, tire=tire)
-    fmu_dir = Path(out_dir) / "fmu"
     rec = read_recording(csv_path)
     sig = None
     with _timed(rep.timings, "identify"):
@@ -169,16 +172,21 @@ def process_tire(csv_path: str, stem: str, tire: str, out_dir: str) -> TireRepor
             b.set_title(f"ln(peaks), R² {rep.paper['r2']:.3f} (Fig. 9b)")
             b.legend(fontsize=8)
             rep.figures["decay"] = png_bytes(fig)
-    fmu_path = fmu_dir / f"{stem}_{tire}.fmu"
+    method = "waveform" if rep.waveform else "paper"
+    fmu_path = Path(out_dir) / not_recommended_fmu(stem, tire, method)
     if rep.paper is not None:
         with _timed(rep.timings, "export"):
-            params = {"recording": rec.source, "speed_kmh": rec.speed_kmh, "tires": {tire: rep.waveform or rep.paper}}
-            params_file = Path(out_dir) / "params" / f"{stem}_{tire}.json"
+            params = {"recording": rec.source, "speed_kmh": rec.speed_kmh, "tires": {tire: rep.waveform or rep.paper},
+                      "note": f"NOT RECOMMENDED: the {method} fit of one corner alone; the recommended k and c are "
+                              f"in ../../{stem}.json"}
+            params_file = Path(out_dir) / not_recommended_params(stem, tire, method)
+            params_file.parent.mkdir(parents=True, exist_ok=True)
             atomic_write_texts({params_file: json_text(params) + "\n"})
             try:
                 export_fmu(params_file, fmu_path, tire=tire, backend="native")
-                rep.fmus.append({"file": f"fmu/{fmu_path.name}", "kind": "point_contact",
-                                 "role": "identified point-contact tire"})
+                rep.fmus.append({"file": not_recommended_fmu(stem, tire, method), "kind": "point_contact",
+                                 "recommended": False, "method": method,
+                                 "role": f"point-contact tire of the {method} fit of this corner alone"})
             except InputError as exc:
                 rep.errors.append(f"export: {exc.problem}")
     if fmu_path.exists():
@@ -208,8 +216,7 @@ def diagnose_recording(csv_path: str, stem: str, out_dir: str) -> DiagnosisRepor
     rec = read_recording(csv_path)
     with _timed(rep.timings, "diagnose"):
         try:
-            diag, gain = run_tractor_diagnosis(rec, fmu_dir=Path(out_dir) / "fmu", stem=f"{stem}_extended",
-                                               strict=False)
+            diag, gain = run_tractor_diagnosis(rec, fmu_dir=Path(out_dir) / "fmu", stem=stem, strict=False)
         except (InputError, ValueError) as exc:
             rep.errors.append(f"diagnose: {getattr(exc, 'problem', exc)}")
             return rep
@@ -218,9 +225,16 @@ def diagnose_recording(csv_path: str, stem: str, out_dir: str) -> DiagnosisRepor
                          timings={k: round(v, 3) for k, v in diag.timings().items()},
                          warnings=list((diag.problem.rec.conditioning or {}).get("warnings", []))
                          + diagnosis_warnings(diag, gain))
-    role = "extended tire, fitted jointly with the whole tractor (" + (", ".join(diag.effects) or "no effect") + ")"
+    role = ("recommended: extended tire, fitted jointly with the whole tractor ("
+            + (", ".join(diag.effects) or "no effect") + "); built-in test cleat off (cleat_height 0)")
     for path in gain.fmu_paths:
-        rep.fmus.append({"file": f"fmu/{Path(path).name}", "kind": "extended_tire", "role": role})
+        rep.fmus.append({"file": f"fmu/{Path(path).name}", "kind": "extended_tire", "recommended": True,
+                         "role": role})
+    with _timed(rep.timings, "export"):
+        try:
+            rep.fmus += write_recommended_files(rec, stem, rep.diagnosis, out_dir)
+        except (InputError, OSError) as exc:
+            rep.errors.append(f"export: {getattr(exc, 'problem', exc)}")
     with _timed(rep.timings, "figures"):
         rep.figures["diagnosis"] = png_bytes(plot_tractor_diagnosis(diag, nrmse_before=gain.nrmse_before,
                                                                     nrmse_after=gain.nrmse_after))
@@ -259,30 +273,6 @@ def _job(args):
                                                                                         tire=rest[2])
         rep.errors.append(f"internal error: {exc.__class__.__name__}: {exc}")
         return rep
-
-
-def remove_staging(out_dir) -> list[Path]:
-    """Remove the staging files a killed run left in a report folder (``.NAME.*.tmp`` of the atomic writes,
-    ``.NAME.*.fmu.part`` of the FMU builds, the figures' staging folder); return them."""
-    removed = []
-    staging = Path(out_dir) / FIGURES_STAGING
-    if staging.is_dir():
-        import shutil
-        removed.append(staging)
-        shutil.rmtree(staging, ignore_errors=True)
-    for sub in ("", "fmu", "params", "tables"):
-        folder = Path(out_dir) / sub
-        if not folder.is_dir():
-            continue
-        for path in folder.iterdir():
-            if path.name.startswith(".") and path.name.endswith((".tmp", ".fmu.part")) and path.is_file():
-                path.unlink(missing_ok=True)
-                removed.append(path)
-    return removed
-
-
-#: Staging folder of the figures while a batch runs (each result's figures go to disk as it arrives).
-FIGURES_STAGING = ".figures-staging"
 
 
 def _stream_figures(rep, folder: Path) -> None:
@@ -372,7 +362,7 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
     figures = out_dir / FIGURES_STAGING
     results = []
     with executor_for(workers, scheduler) as executor:
-        for sub in ("fmu", "params"):
+        for sub in FOLDERS:
             make_folders(out_dir / sub)
         remove_staging(out_dir)
         make_folders(figures)

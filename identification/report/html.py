@@ -1,15 +1,15 @@
 """The batch report: one self-contained HTML file (figures embedded as PNG data URIs) and its tables as CSV.
 
-The first screen is the verdict (``recommended``): per tire the recommended k
-and c (the final model's, those in the extended FMU) with intervals, the
-effects named, the fit against the noise floor and a plain flag when
-something is unexplained; then a table of contents, a "how to read this" box,
+The first screen is the verdict (``recommended``, :mod:`~identification.report.verdict`): per tire the
+recommended k and c (the final model's, those in the recommended FMU) with intervals, the effects named
+with every warning of the run beside them, the fit against the noise floor and a plain flag when something
+is left above it, and which file to take (:mod:`~identification.report.files`); then a table of contents, a "how to read this" box,
 k and c against speed, and the sections ``summary``, ``table4`` (the paper's
 Table 4), ``waveform`` (the methods side by side), ``diagnoses`` (per
 recording ``diagnosis-<recording>``: effects with evidence, body, overlays,
 the ride comfort), ``tires`` (``tire-<recording>-<tire>``: Figure 9a/9b, the
-co-simulated point-contact FMU), ``fmus`` and ``timings``.  Every table is
-also written as ``tables/<name>.csv`` beside ``summary.json``.
+co-simulated one-corner FMU and why it is not recommended), ``fmus`` and ``timings``.  Every table is
+also written as ``tables/<name>.csv`` beside ``summary.json`` (:func:`summary_document`).
 """
 
 from __future__ import annotations
@@ -24,8 +24,11 @@ from pathlib import Path
 from .. import __version__
 from .._files import atomic_write_texts, json_text
 from .batch import FIGURES_STAGING, BatchResult
-from .tables import (METHODS_HEADS, TABLE4_HEADS, csv_text, read_truth, ride_table, table4_table,
-                            verdict_heads, verdict_table, waveform_table)
+from ..diagnose.joint_evidence import interval_text
+from .files import not_recommended_params, point_contact_fmu, recommended_fmu, recommended_params
+from .tables import (METHODS_HEADS, TABLE4_HEADS, csv_text, read_truth, ride_table, table4_table, verdict_table,
+                     waveform_table)
+from .verdict import agreement_text, fmus_section, not_recommended_reason, verdict_section
 
 __all__ = ["render_report", "write_report"]
 
@@ -44,6 +47,10 @@ nav.toc{background:#f4f7fa;border:1px solid #dde3ea;padding:.5em 1em;margin:1em 
 .howto{background:#f4f7fa;border-left:4px solid #3a6ea5;padding:.5em 1em;margin:1em 0;font-size:.92em}
 .howto dt{font-weight:600}.howto dd{margin:0 0 .3em 1em}
 @media (max-width:900px){body{padding:0 .4em}table{font-size:.8em}th,td{padding:.2em .3em}}
+@media (max-width:700px){table.verdict,table.verdict tbody,table.verdict tr,table.verdict td{display:block}
+table.verdict tr:first-child{display:none}table.verdict tr{border:1px solid #c9d3de;margin:0 0 .6em;padding:.2em}
+table.verdict td{border:0;text-align:left;padding:.1em .3em}
+table.verdict td::before{content:attr(data-label) ": ";font-weight:600;color:#556}}
 @media print{body{max-width:none;margin:0;font-size:10pt}nav.toc,.downloads{display:none}
 img{max-width:100%;page-break-inside:avoid}h2{page-break-after:avoid}tr{page-break-inside:avoid}
 a{color:inherit;text-decoration:none}}
@@ -103,26 +110,6 @@ def _tires(result: BatchResult):
             yield r, t
 
 
-def _verdict(result: BatchResult, tables: dict) -> str:
-    table = tables["verdict"]
-    conditional = any(row[12] == "unexplained" for row in table.rows)
-    truth = "k_truth_N_m" in table.columns
-    return ('<section id="recommended"><h2>Verdict: recommended stiffness and damping</h2>'
-            '<p>One joint fit per recording: every channel at once under one body (heave, pitch, roll), with the '
-            'effects the diagnosis named; these k and c are the ones in the exported extended FMUs. '
-            + ('<span class="bad">Some tire keeps a residual above its noise floor: its intervals hold only if '
-               'the model is right.</span>' if conditional else
-               '<span class="ok">Every tire is fitted to within its noise floor.</span>')
-            + (' Rig truth (in italics) from the recording\'s truth file, shown for comparison only.' if truth else '')
-            + '</p><ul class="note">' + "".join(
-                f'<li>{_e(r.stem)} ({r.speed_kmh:.3g} km/h): effects named: '
-                f'<b>{_e(", ".join(r.diagnosis.diagnosis["effects"]) or "none")}</b></li>'
-                for r in result.recordings if r.diagnosis is not None and r.diagnosis.diagnosis is not None)
-            + f'</ul>{table.html(head=verdict_heads(table))}'
-            '<p class="downloads note">Download: <a href="summary.json">summary.json</a> · '
-            + " · ".join(f'<a href="tables/{name}.csv">{name}.csv</a>' for name in tables) + '</p></section>')
-
-
 def _toc(result: BatchResult) -> str:
     parts = [('recommended', 'verdict'), ('howto', 'how to read this'), ('speed', 'k, c vs speed'),
              ('summary', 'recordings'), ('table4', "paper's Table 4"), ('waveform', 'methods side by side'),
@@ -141,8 +128,9 @@ _HOWTO = ('<section id="howto"><h2>How to read this</h2><dl class="howto">'
           'zero-phase 100 Hz low-pass.</dd>'
           '<dt>noise NRMSE</dt><dd>The NRMSE the measurement noise alone would give: a fit at the noise floor '
           'scores about this; "at the noise floor" means within 1.5× it.</dd>'
-          '<dt>unexplained</dt><dd>A channel whose residual stays above 1.5× its noise: the share of the signal '
-          'left and the window where it sits; its intervals are conditional on the model.</dd>'
+          '<dt>above the noise floor</dt><dd>A channel whose residual stays above 1.5× its noise: the ratio, the '
+          'share of the signal energy beyond the noise and the window where it sits; its intervals are '
+          'conditional on the model.</dd>'
           '<dt>effects</dt><dd>What the four-corner point-contact model misses, named by forward selection '
           '(BIC, ≥ 25 % of the residual removed, a physical check each).</dd>'
           '<dt>paper / waveform / final</dt><dd>The paper\'s method reads k from the first two peaks of one damped '
@@ -150,7 +138,9 @@ _HOWTO = ('<section id="howto"><h2>How to read this</h2><dl class="howto">'
           'every channel at once under the body with the named effects. Body cross-talk, footprint and lift-off '
           'bias the first two, which is why they differ from the final values.</dd>'
           '<dt>a_w, VDV</dt><dd>ISO 2631-1 frequency-weighted (Wk) RMS acceleration and vibration dose value at '
-          'the seat, on an ISO 8608 road.</dd></dl></section>')
+          'the seat, on an ISO 8608 road. The "seat" is a point of the rigid body (the cab floor under the seat): '
+          'the model has no seat suspension or cushion, so these are floor values, not the occupant\'s.</dd>'
+          '</dl></section>')
 
 
 def _speed(figure: bytes | None) -> str:
@@ -173,14 +163,12 @@ def _diagnosis_section(r) -> str:
         speed = body["speed_m_s"]
         delay = "" if speed["from_delay"] is None else \
             f', {speed["from_delay"] * 3.6:.2f} km/h from the front/rear delay'
-        indices = "; ".join(f'{name.replace("_", " ")} {body[name]["value"]:.3f} '
-                            f'({body[name]["ci"][0]:.3f}–{body[name]["ci"][1]:.3f})'
+        indices = "; ".join(f'{name.replace("_", " ")} '
+                            + interval_text(body[name]["value"], *body[name]["ci"], sep="–")
                             for name in ("pitch_index", "roll_index", "pivot_index") if body.get(name))
         out.append(f'<p>Effects the four-corner model misses: <b>{_e(effects)}</b>. Front axle {body["front_axle"]}'
                    f'{"; " + indices if indices else ""}. Speed {speed["sidecar"] * 3.6:.2f} km/h (sidecar){delay}. '
-                   + (f'Extended FMUs co-simulated under the body agree with the fitting model to '
-                      f'{d["agreement"]:.1e}' if d["agreement"] is not None else
-                      "The extended model's FMUs cannot start (see the warnings): none was kept")
+                   + agreement_text(d["agreement"])
                    + f'; diagnosis {d["seconds"]:.1f} s. Intervals: {_e(d["intervals"])}.</p>')
         for name in d["effects"]:
             out.append(f'<div class="effect"><b>{_e(name)}</b>: {_e(d["evidence"].get(name, ""))}</div>')
@@ -213,8 +201,9 @@ def _ride(stem: str, rep) -> str:
     road = d["road"]
     return (f'<h4>Ride comfort: the tractor on an ISO 8608 class {_e(road["class"])} road</h4>'
             f'<p>The {_e(d["body"]["source"])} at {d["speed_m_s"] * 3.6:.3g} km/h for '
-            f'{d["duration_s"]:g} s (road seed {road["seed"]}), once per tire parameter set; the seat '
-            f'{d["seat"]["x_m"]:.2f} m behind the front axle, rated by ISO 2631-1 (Wk).{_versus_final(d)}</p>'
+            f'{d["duration_s"]:g} s (road seed {road["seed"]}), once per tire parameter set; the "seat" is the '
+            f'point of the body {d["seat"]["x_m"]:.2f} m behind the front axle, rated by ISO 2631-1 (Wk): a floor '
+            f'value, without seat suspension or cushion.{_versus_final(d)}</p>'
             '<table><tr><th class="l">set</th><th>k FL/FR/RL/RR, kN/m</th><th>a_w, m/s²</th>'
             f'<th>VDV, m/s^1.75</th><th>MTVV, m/s²</th><th>crest factor</th></tr>{rows}</table>'
             + (_img(rep.figures["ride"], f"{stem} ride comfort") if "ride" in rep.figures else ""))
@@ -224,10 +213,19 @@ def _tire_section(r, t) -> str:
     out = [f'<section id="tire-{_e(r.stem)}-{t.tire}"><h3>{_e(r.stem)} · {t.tire}</h3>']
     for err in t.errors:
         out.append(f'<p class="bad">{_e(err)}</p>')
-    if t.paper is not None:
-        out.append(f'<p class="note">Parameters exported to the point-contact FMU: '
-                   f'<a href="params/{_e(r.stem)}_{t.tire}.json">params/{_e(r.stem)}_{t.tire}.json</a>; '
-                   f'the recommended ones are in the verdict.</p>')
+    if r.recommended(t.tire) is not None:
+        out.append(f'<p class="note">Recommended: <a href="{recommended_fmu(r.stem, t.tire)}">'
+                   f'<code>{recommended_fmu(r.stem, t.tire)}</code></a> (k and c in '
+                   f'<a href="{recommended_params(r.stem)}"><code>{recommended_params(r.stem)}</code></a>; plain '
+                   f'spring-damper: <a href="{point_contact_fmu(r.stem, t.tire)}"><code>'
+                   f'{point_contact_fmu(r.stem, t.tire)}</code></a>).</p>')
+    fmu = next((f["file"] for f in t.fmus if not f.get("recommended")), None)
+    if fmu is not None:
+        method = "waveform" if t.waveform else "paper"
+        params = not_recommended_params(r.stem, t.tire, method)
+        out.append(f'<p class="warn">This corner\'s own fit, <a href="{_e(fmu)}"><code>{_e(fmu)}</code></a> '
+                   f'(<a href="{_e(params)}"><code>{_e(params)}</code></a>), is '
+                   f'{_e(not_recommended_reason(r, t))}.</p>')
     if "decay" in t.figures:
         out.append(_img(t.figures["decay"], f"{r.stem} {t.tire} decay"))
     s = t.simulate
@@ -235,32 +233,11 @@ def _tire_section(r, t) -> str:
         out.append(f'<p>Point-contact FMU co-simulated with fmpy: NRMSE <b>{s["nrmse"]:.1%}</b>, R² {s["r2"]:.3f}; '
                    f'k<sub>FMU</sub> {s["k_fmu"] / 1e3:.1f} kN/m, re-identified {s["k_reidentified"] / 1e3:.1f} kN/m; '
                    f'the misfit sits mostly in the <b>{_e(s["worst_window"].replace("_", " "))}</b> window.</p>')
+        out += [f'<p class="warn">warning: {_e(w)}</p>' for w in s.get("warnings") or []]
         out.append(_img(t.figures.get("comparison", b""), f"{r.stem} {t.tire} co-simulation")
                    if "comparison" in t.figures else "")
     out.append("</section>")
     return "".join(out)
-
-
-def _all_fmus(result: BatchResult):
-    for r in result.recordings:
-        yield from (r.diagnosis.fmus if r.diagnosis is not None else [])
-        for t in r.tires:
-            yield from t.fmus
-
-
-def _fmus(result: BatchResult) -> str:
-    rows = []
-    for f in _all_fmus(result):
-        ok = not f.get("problems")
-        verdict = '<span class="ok">validate_fmu: no problem</span>' if ok else \
-            '<span class="bad">' + _e("; ".join(f["problems"])) + "</span>"
-        rows.append(f'<tr><td class="l"><a href="{_e(f["file"])}"><code>{_e(f["file"])}</code></a></td>'
-                    f'<td class="l">{_e(f["kind"])}</td>'
-                    f'<td class="l">{_e(f["role"])}</td><td class="l">{verdict}</td></tr>')
-    return ('<section id="fmus"><h2>Exported FMUs</h2><p class="note">FMI 2.0 co-simulation, native C: binaries '
-            'for linux64, win64 and darwin64 and the C sources inside; the importing machine needs no Python.</p>'
-            '<table><tr><th class="l">file</th><th class="l">kind</th>'
-            f'<th class="l">content</th><th class="l">validation</th></tr>{"".join(rows)}</table></section>')
 
 
 def _timings(result: BatchResult, extra: dict | None) -> str:
@@ -284,7 +261,7 @@ def render_report(result: BatchResult, *, title: str = "cleatfmu report", extra:
             f'<meta name="viewport" content="width=device-width, initial-scale=1"><title>{_e(title)}</title>'
             f'<style>{_CSS}</style></head><body><h1>{_e(title)}</h1><p class="note">cleatfmu {__version__}, {stamp}. '
             'Hub accelerations in m/s², gravity excluded; all comparisons after the zero-phase 100 Hz low-pass.</p>'
-            f'{_verdict(result, tables)}{_toc(result)}{_HOWTO}{_speed(speed_png)}{_summary(result)}'
+            f'{verdict_section(result, tables)}{_toc(result)}{_HOWTO}{_speed(speed_png)}{_summary(result)}'
             '<section id="table4"><h2>Stiffness and damping by the paper\'s method (Table 4)</h2>'
             '<p class="note">T and δ from the first two peaks, ζ and ω<sub>n</sub> by eqs. 7-8, K = m ω<sub>n</sub>²,'
             ' C by the exponential fit through the first peak (eqs. 16-17), R² of the semi-log regression.</p>'
@@ -295,7 +272,7 @@ def render_report(result: BatchResult, *, title: str = "cleatfmu report", extra:
             f'{tables["methods"].html(head=METHODS_HEADS)}</section>'
             f'<section id="diagnoses"><h2>Whole-tractor diagnoses</h2>{diagnoses}</section>'
             f'<section id="tires"><h2>Tires: decay, point-contact co-simulation</h2>{tires}</section>'
-            f'{_fmus(result)}{_timings(result, extra)}</body></html>\n')
+            f'{fmus_section(result)}{_timings(result, extra)}</body></html>\n')
 
 
 def build_tables(result: BatchResult, truths: dict) -> dict:
@@ -326,16 +303,7 @@ def write_report(result: BatchResult, *, title: str = "cleatfmu report", extra: 
     out = Path(result.out_dir)
     truths = {r.source: read_truth(r.source) for r in result.recordings}
     tables = build_tables(result, truths)
-    summary = {"recordings": [{"source": r.source, "ok": r.ok, "error": r.error,
-                               "diagnosis": r.diagnosis.diagnosis if r.diagnosis is not None else None,
-                               "diagnosis_fmus": r.diagnosis.fmus if r.diagnosis is not None else [],
-                               "diagnosis_errors": r.diagnosis.errors if r.diagnosis is not None else [],
-                               "ride": r.diagnosis.ride if r.diagnosis is not None else None,
-                               "tires": {t.tire: {"recommended": r.recommended(t.tire), "paper": t.paper,
-                                                  "waveform": t.waveform, "simulate": t.simulate, "fmus": t.fmus,
-                                                  "errors": t.errors}
-                                         for t in r.tires}} for r in result.recordings],
-               "failures": result.failures, "seconds": result.seconds, "stage_seconds": result.timings}
+    summary = summary_document(result)
     staging = out / FIGURES_STAGING
     if len(result.recordings) > EMBED_MAX_RECORDINGS and staging.is_dir():
         _publish_figures(result, staging, out / "figures")
@@ -346,6 +314,43 @@ def write_report(result: BatchResult, *, title: str = "cleatfmu report", extra: 
                         **{out / "tables" / f"{name}.csv": csv_text(t) for name, t in tables.items()}})
     shutil.rmtree(staging, ignore_errors=True)
     return out / "report.html"
+
+
+def _files_of(r) -> dict:
+    """The recommended files of a recording that has them (paths relative to the report folder)."""
+    fmus = {f["file"] for f in (r.diagnosis.fmus if r.diagnosis is not None else [])}
+    tires = [t.tire for t in r.tires if r.recommended(t.tire) is not None]
+    return {"recommended_fmus": {t: recommended_fmu(r.stem, t) for t in tires if recommended_fmu(r.stem, t) in fmus},
+            "point_contact_fmus": {t: point_contact_fmu(r.stem, t) for t in tires
+                                   if point_contact_fmu(r.stem, t) in fmus},
+            "params": recommended_params(r.stem) if tires else None}
+
+
+def summary_document(result: BatchResult) -> dict:
+    """``summary.json``: every number (SI units), and per recording its name, its recommended files and its
+    diagnosis (the body ``simulate``/``ssp``/``ride --body summary.json`` take for that recording)."""
+    recordings = []
+    for r in result.recordings:
+        files = _files_of(r)
+        tires = {}
+        for t in r.tires:
+            rec = r.recommended(t.tire)
+            if rec is not None:
+                rec = dict(rec, fmu=files["recommended_fmus"].get(t.tire),
+                           point_contact_fmu=files["point_contact_fmus"].get(t.tire))
+            tires[t.tire] = {"recommended": rec, "paper": t.paper, "waveform": t.waveform, "simulate": t.simulate,
+                             "fmus": t.fmus, "errors": t.errors}
+        recordings.append({"name": r.stem, "source": r.source, "ok": r.ok, "error": r.error, **files,
+                           "diagnosis": r.diagnosis.diagnosis if r.diagnosis is not None else None,
+                           "diagnosis_fmus": r.diagnosis.fmus if r.diagnosis is not None else [],
+                           "diagnosis_errors": r.diagnosis.errors if r.diagnosis is not None else [],
+                           "ride": r.diagnosis.ride if r.diagnosis is not None else None, "tires": tires})
+    return {"format": "cleatfmu-report-summary/1",
+            "use": "per recording, recommended_fmus (fmu/<recording>_<TIRE>.fmu) carry the recommended k and c; "
+                   "'cleatfmu simulate fmu --body summary.json REC.csv' (also ssp, ride --body) takes the "
+                   "recording's diagnosis from here",
+            "recordings": recordings, "failures": result.failures, "seconds": result.seconds,
+            "stage_seconds": result.timings}
 
 
 def _publish_figures(result: BatchResult, staging: Path, target: Path) -> None:

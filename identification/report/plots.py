@@ -87,12 +87,13 @@ _WINDOW_COLORS = {"impact": "#f4c27a", "free_decay": "#bfe3bf", "other_axle": "#
 
 
 def _limit_to(ax, measured, factor=1.6):
-    """Scale the y axis to the measurement (model spikes beyond it are clipped, noted in the label)."""
+    """Scale the y axis to the measurement; model spikes beyond it run off the plot, which the label says (in
+    words that cannot be read as a saturated sensor: the measurement itself is inside the axis)."""
     top = factor * float(np.max(np.abs(measured))) if np.size(measured) else 1.0
     lo, hi = ax.get_ylim()
     if hi > top or lo < -top:
         ax.set_ylim(-top, top)
-        ax.set_ylabel(ax.get_ylabel() + " (clipped)")
+        ax.set_ylabel(ax.get_ylabel() + f"\n(axis ±{factor:g}× the measured peak; model peaks beyond it)")
 
 
 def plot_comparison(cmp, *, title: str | None = None):

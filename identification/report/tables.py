@@ -14,11 +14,12 @@ import csv
 import html
 import io
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = ["Table", "verdict_table", "verdict_heads", "table4_table", "waveform_table", "ride_table", "csv_text",
-           "read_truth", "TABLE4_HEADS", "METHODS_HEADS"]
+           "read_truth", "TABLE4_HEADS", "METHODS_HEADS", "unexplained_flag"]
 
 
 @dataclass
@@ -30,10 +31,12 @@ class Table:
     rows: list = field(default_factory=list)
     html_rows: list = field(default_factory=list)
 
-    def html(self, *, head: list | None = None) -> str:
-        """``<div class="scroll"><table>...</table></div>`` with `head` (HTML column heads, default the CSV's)."""
+    def html(self, *, head: list | None = None, cls: str | None = None) -> str:
+        """``<div class="scroll"><table>...</table></div>`` with `head` (HTML column heads, default the CSV's)
+        and the table's class `cls`."""
         heads = "".join(f"<th>{h}</th>" for h in (head or [html.escape(c) for c in self.columns]))
-        return f'<div class="scroll"><table><tr>{heads}</tr>{"".join(self.html_rows)}</table></div>'
+        attr = f' class="{cls}"' if cls else ""
+        return f'<div class="scroll"><table{attr}><tr>{heads}</tr>{"".join(self.html_rows)}</table></div>'
 
 
 def csv_text(table: Table) -> str:
@@ -70,13 +73,35 @@ def _tires(result):
             yield r, t
 
 
+def _share(x: float) -> str:
+    """A share of the signal as a percentage with two significant digits (never ``0.0%`` for a small one)."""
+    return f"{100 * x:.2g} %" if x < 0.1 else f"{100 * x:.0f} %"
+
+
+def unexplained_flag(left: dict | None, nrmse: float, noise: float) -> str:
+    """The verdict cell of a tire: at the noise floor, or what is left above it in the numbers beside it."""
+    if left is None:
+        return '<span class="ok">at the noise floor</span>'
+    return (f'<span class="warn">above the noise floor: residual {left["residual_to_noise"]:.1f}× the noise '
+            f'(NRMSE {nrmse:.1%} against {noise:.1%}); the excess is {_share(left["share"])} of the signal energy, '
+            f'{left["window"][0]:.2f}–{left["window"][1]:.2f} s; intervals conditional on the model</span>')
+
+
+def _labelled(cells: list, labels: list) -> str:
+    """The cells (``<td...>...</td>``) each with its column's name (``data-label``, shown on a narrow screen)."""
+    return "".join(c.replace("<td", f'<td data-label="{html.escape(re.sub("<[^>]+>", "", lab))}"', 1)
+                   for c, lab in zip(cells, labels))
+
+
 def verdict_table(result, truths: dict) -> Table:
-    """Per tire: the recommended k, c (the final model's, in the extended FMU) with intervals, the effects
+    """Per tire: the recommended k, c (the final model's, in the recommended FMU) with intervals, the effects
     named, the fit against the noise floor and a plain flag; the rig truth where there is one."""
     with_truth = any(truths.values())
     table = Table("verdict", ["recording", "speed_km_h", "tire", "k_N_m", "k_ci_low", "k_ci_high", "c_Ns_m",
                               "c_ci_low", "c_ci_high", "effects", "nrmse_after", "noise_nrmse", "verdict",
-                              "unexplained_share", "fmu"] + (["k_truth_N_m", "c_truth_Ns_m"] if with_truth else []))
+                              "unexplained_share", "fmu", "point_contact_fmu"]
+                  + (["k_truth_N_m", "c_truth_Ns_m"] if with_truth else []))
+    heads = verdict_heads(table)
     for r, t in _tires(result):
         rec = r.recommended(t.tire)
         if rec is None:
@@ -85,28 +110,30 @@ def verdict_table(result, truths: dict) -> Table:
         dt = d["tires"][t.tire]
         left = dt["unexplained"]
         effects = ", ".join(d["effects"]) or "none"
-        fmu = next((f["file"] for f in r.diagnosis.fmus if f["file"].endswith(f"_{t.tire}.fmu")), None)
+        recommended = [f["file"] for f in r.diagnosis.fmus if f.get("recommended")]
+        fmu = next((f for f in recommended if f == f"fmu/{r.stem}_{t.tire}.fmu"), None)
+        point = next((f for f in recommended if f.endswith(f"/{r.stem}_{t.tire}.fmu") and f != fmu), None)
         truth = (truths.get(r.source) or {}).get("tires", {}).get(t.tire)
-        verdict = "at the noise floor" if left is None else "unexplained"
+        verdict = "at the noise floor" if left is None else "above the noise floor"
         row = [r.stem, r.speed_kmh, t.tire, rec["k"], *rec["k_ci"], rec["c"], *rec["c_ci"], effects,
-               dt["nrmse_after"], dt["noise_nrmse"], verdict, None if left is None else left["share"], fmu]
+               dt["nrmse_after"], dt["noise_nrmse"], verdict, None if left is None else left["share"], fmu, point]
         if with_truth:
             row += [truth["k"] if truth else None, truth["c"] if truth else None]
         table.rows.append(row)
-        flag = '<span class="ok">at the noise floor</span>' if left is None else \
-            (f'<span class="bad">unexplained: {left["share"]:.1%} of the signal, '
-             f'{left["window"][0]:.2f}–{left["window"][1]:.2f} s; intervals conditional on the model</span>')
-        link = f'<a href="{_e(fmu)}">{t.tire}.fmu</a>' if fmu else "–"
-        cells = (f'<td class="l"><a href="#diagnosis-{_e(r.stem)}">{_e(r.stem)}</a></td>'
-                 f'<td>{r.speed_kmh:.3g}</td><td class="l"><a href="#tire-{_e(r.stem)}-{t.tire}">{t.tire}</a></td>'
-                 f'<td><b>{rec["k"] / 1e3:.2f}</b></td><td>{rec["k_ci"][0] / 1e3:.2f}–{rec["k_ci"][1] / 1e3:.2f}</td>'
-                 f'<td><b>{rec["c"] / 1e3:.3f}</b></td><td>{rec["c_ci"][0] / 1e3:.3f}–{rec["c_ci"][1] / 1e3:.3f}</td>')
+        link = f'<a href="{_e(fmu)}">{_e(fmu.rsplit("/", 1)[-1])}</a>' if fmu else "–"
+        cells = [f'<td class="l"><a href="#diagnosis-{_e(r.stem)}">{_e(r.stem)}</a></td>',
+                 f'<td>{r.speed_kmh:.3g}</td>', f'<td class="l"><a href="#tire-{_e(r.stem)}-{t.tire}">{t.tire}</a></td>',
+                 f'<td><b>{rec["k"] / 1e3:.2f}</b></td>',
+                 f'<td>{rec["k_ci"][0] / 1e3:.2f}–{rec["k_ci"][1] / 1e3:.2f}</td>',
+                 f'<td><b>{rec["c"] / 1e3:.3f}</b></td>',
+                 f'<td>{rec["c_ci"][0] / 1e3:.3f}–{rec["c_ci"][1] / 1e3:.3f}</td>']
         if with_truth:
-            cells += _td(truth["k"] if truth else None, ".2f", 1e-3, "truth") + \
-                _td(truth["c"] if truth else None, ".3f", 1e-3, "truth")
-        cells += (f'<td>{dt["nrmse_after"]:.1%}</td><td>{dt["noise_nrmse"]:.1%}</td>'
-                  f'<td class="l">{flag}</td><td class="l">{link}</td>')
-        table.html_rows.append(f"<tr>{cells}</tr>")
+            cells += [_td(truth["k"] if truth else None, ".2f", 1e-3, "truth"),
+                      _td(truth["c"] if truth else None, ".3f", 1e-3, "truth")]
+        cells += [f'<td>{dt["nrmse_after"]:.1%}</td>', f'<td>{dt["noise_nrmse"]:.1%}</td>',
+                  f'<td class="l">{unexplained_flag(left, dt["nrmse_after"], dt["noise_nrmse"])}</td>',
+                  f'<td class="l">{link}</td>']
+        table.html_rows.append(f"<tr>{_labelled(cells, heads)}</tr>")
     return table
 
 
@@ -114,24 +141,36 @@ def verdict_heads(table: Table) -> list:
     heads = ['recording', 'km/h', 'tire', 'K / kN·m⁻¹', 'K 95 %', 'C / kN·s·m⁻¹', 'C 95 %']
     if "k_truth_N_m" in table.columns:
         heads += ['K rig truth', 'C rig truth']
-    return heads + ['NRMSE', 'noise NRMSE', 'verdict', 'extended FMU']
+    return heads + ['NRMSE', 'noise NRMSE', 'verdict', 'recommended FMU']
+
+
+def _flipped(r) -> list:
+    """The channels the joint fit found upside down after the conditioning (the per-tire methods used them
+    as recorded)."""
+    d = r.diagnosis.diagnosis if r.diagnosis is not None else None
+    chosen = ((d or {}).get("sign_test") or {}).get("chosen")
+    return [c for c in str(chosen).split("+") if c in ("FL", "FR", "RL", "RR")] if chosen else []
 
 
 def table4_table(result) -> Table:
     """The paper's Table 4 for every speed and tire."""
     table = Table("table4", ["speed_km_h", "recording", "tire", "T_s", "zeta", "delta", "omega_n_rad_s", "k_N_m",
-                             "c_Ns_m", "r2", "peaks"])
+                             "c_Ns_m", "r2", "peaks", "channel_sign"])
     for r, t in sorted(_tires(result), key=lambda rt: (rt[0].speed_kmh or 0, rt[1].tire)):
         p = t.paper
+        flipped = t.tire in _flipped(r)
+        sign = "upside down (found by the joint fit; used as recorded here)" if flipped else "as recorded"
         if p is None:
-            table.rows.append([r.speed_kmh, r.stem, t.tire] + [None] * 8)
+            table.rows.append([r.speed_kmh, r.stem, t.tire] + [None] * 8 + [sign])
             table.html_rows.append(f'<tr><td>{r.speed_kmh:.4g}</td><td class="l">{_e(r.stem)}</td>'
                                    f'<td class="l">{t.tire}</td><td class="l bad" colspan="8">not identified</td></tr>')
             continue
         table.rows.append([r.speed_kmh, r.stem, t.tire, p["T"], p["zeta"], p["delta"], p["omega_n"], p["k"], p["c"],
-                           p["r2"], p["n_peaks"]])
+                           p["r2"], p["n_peaks"], sign])
+        mark = (' <span class="bad" title="the joint fit found this channel upside down">⚠ channel upside down: '
+                'computed from it as recorded</span>') if flipped else ""
         table.html_rows.append(
-            f'<tr><td>{r.speed_kmh:.4g}</td><td class="l">{_e(r.stem)}</td><td class="l">{t.tire}</td>'
+            f'<tr><td>{r.speed_kmh:.4g}</td><td class="l">{_e(r.stem)}</td><td class="l">{t.tire}{mark}</td>'
             f'<td>{p["T"]:.3f}</td><td>{p["zeta"]:.3f}</td><td>{p["delta"]:.3f}</td>'
             f'<td>{p["omega_n"]:.2f}</td><td>{p["k"] / 1e3:.2f}</td><td>{p["c"] / 1e3:.2f}</td>'
             f'<td>{p["r2"]:.2f}</td><td>{p["n_peaks"]}</td></tr>')
