@@ -216,7 +216,9 @@ def test_waveform_identify_cli(cli, tmp_path, baseline_runs):
     res = cli("identify", csv_path, "--method", "waveform", "--json")
     doc = json.loads(res.out)
     for tire, entry in doc["tires"].items():
-        assert set(entry) == {"k", "c", "T", "delta", "zeta", "omega_n", "r2", "n_peaks", "mass", "k_ci", "c_ci"}
+        assert set(entry) == {"k", "c", "T", "delta", "zeta", "omega_n", "r2", "n_peaks", "mass", "k_ci", "c_ci",
+                              "decay_misfit", "warning"}
+        assert entry["warning"] is None and entry["decay_misfit"] < 2.0     # the rig's baseline: one mode
         lo, hi = entry["k_ci"]
         assert lo < entry["k"] < hi
         assert entry["omega_n"] ** 2 * entry["mass"] == pytest.approx(entry["k"], rel=1e-12)
