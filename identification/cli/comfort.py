@@ -17,6 +17,7 @@ from pathlib import Path
 from ..errors import InputError
 from .._files import json_text
 from ..recording.csv_reader import check_uniform_time
+from .util import check_output
 
 __all__ = ["add_parser", "run", "read_acceleration_csv", "DEFAULT_EXPOSURE_H"]
 
@@ -47,6 +48,13 @@ def add_parser(subparsers) -> None:
                    help="rate a seat's three axes: the fore-aft, lateral and vertical columns (weighted Wd, Wd, Wk): "
                         "a_w, VDV, MTVV per axis, the vector sum (k = 1.4, 1.4, 1) and the worst axis's A(8) and "
                         "daily VDV against 2002/44/EC (--weighting and --column do not apply)")
+    p.add_argument("--mtvv-window-s", type=float, default=1.0, metavar="TAU",
+                   help="integration time of the running RMS whose maximum is MTVV, s; the record must be at least "
+                        "this long (ISO 2631-1 recommends 1 s) (default: %(default)s)")
+    p.add_argument("--bands", action="store_true",
+                   help="also print the one-third-octave band spectrum of each weighted column (always in --json)")
+    p.add_argument("--plot", metavar="OUT.png", default=None,
+                   help="write the one-third-octave band spectra of the weighted columns as a figure")
     p.add_argument("--json", action="store_true", help="print JSON (SI units) instead of a table")
     p.set_defaults(func=run)
 
@@ -65,7 +73,7 @@ def _exposure_h(text: str | None, weighting: str) -> float | None:
     return value
 
 
-def read_acceleration_csv(path) -> tuple[list[str], float, dict]:
+def read_acceleration_csv(path, *, min_duration_s: float = None) -> tuple[list[str], float, dict]:
     """Read and check an acceleration record: its column names, sampling rate (Hz) and columns (m/s²).
 
     Parameters
@@ -90,13 +98,10 @@ def read_acceleration_csv(path) -> tuple[list[str], float, dict]:
     """
     import numpy as np
 
+    from .._files import parse_number, read_input_text
+
     path = Path(path)
-    if not path.is_file():
-        raise InputError(path, "no such file" if not path.exists() else "not a file")
-    try:
-        lines = path.read_text(encoding="utf-8-sig").splitlines()
-    except UnicodeDecodeError:
-        raise InputError(path, "not a UTF-8 text file") from None
+    lines = read_input_text(path, encoding="utf-8-sig").splitlines()
     if not lines or not lines[0].strip():
         raise InputError(path, "empty file (expected a header 'time,<columns>')")
     header = [h.strip() for h in lines[0].split(",")]
@@ -120,7 +125,7 @@ def read_acceleration_csv(path) -> tuple[list[str], float, dict]:
         for lineno, line in numbered:
             for name, cell in zip(header, line.split(",")):
                 try:
-                    float(cell)
+                    parse_number(cell)
                 except ValueError:
                     raise InputError(path, f"line {lineno}, column {name}: {cell.strip()!r} is not a number") from None
         raise InputError(path, "unreadable numeric data") from None  # pragma: no cover
@@ -129,9 +134,10 @@ def read_acceleration_csv(path) -> tuple[list[str], float, dict]:
         raise InputError(path, f"line {numbered[row][0]}, column {header[col]}: non-finite value {data[row, col]}")
     t = data[:, 0]
     duration = float(t[-1] - t[0])
-    if duration < MIN_DURATION_S:
-        raise InputError(path, f"record too short: {duration:g} s (at least {MIN_DURATION_S:g} s needed for the "
-                               f"1 s running RMS)")
+    shortest = MIN_DURATION_S if min_duration_s is None else min_duration_s
+    if duration < shortest:
+        raise InputError(path, f"record too short: {duration:g} s (at least {shortest:g} s needed for the "
+                               f"{shortest:g} s running RMS of MTVV; --mtvv-window-s sets it)")
     nominal = check_uniform_time(path, t, line_of=lambda i: numbered[i][0])
     names = header[1:]
     return names, 1.0 / nominal, {name: data[:, j + 1] for j, name in enumerate(names)}
@@ -141,8 +147,9 @@ def _fmt(x) -> str:
     return "-" if x is None or not math.isfinite(x) else f"{x:.4g}"
 
 
-def format_table(path, weighting, results: dict) -> str:
-    """The human-readable report of :func:`run` (`results`: column name -> ComfortResult)."""
+def format_table(path, weighting, results: dict, bands: dict | None = None) -> str:
+    """The human-readable report of :func:`run` (`results`: column name -> ComfortResult; `bands`: column name
+    -> :class:`~identification.comfort.spectra.ThirdOctave` or None, printed when given)."""
     from ..comfort.iso2631 import (CREST_FACTOR_LIMIT, EU_A8_ACTION_M_S2, EU_A8_LIMIT_M_S2, EU_VDV_ACTION, EU_VDV_LIMIT,
                           MTVV_RATIO_LIMIT, VDV_RATIO_LIMIT)
 
@@ -179,7 +186,20 @@ def format_table(path, weighting, results: dict) -> str:
                 (("crest factor", r.crest_factor, CREST_FACTOR_LIMIT), ("MTVV/a_w", r.mtvv_ratio, MTVV_RATIO_LIMIT),
                  ("VDV/(a_w T^1/4)", r.vdv_ratio, VDV_RATIO_LIMIT)) if value > limit]
         if over:
-            lines.append(f"  {name}: {', '.join(over)}: shocks, which a_w underestimates (judge by MTVV and VDV)")
+            lines.append(f"  {name}: {', '.join(over)}: by ISO 2631-1 6.3.3 the weighted RMS alone may "
+                         f"underestimate this record (occasional shocks or vibration that varies in time); "
+                         f"judge it by MTVV and VDV as well")
+    if bands:
+        shown = {name: b for name, b in bands.items() if b is not None}
+        lines.append("one-third-octave bands of the weighted acceleration: RMS m/s² (level dB re 1e-6 m/s²)")
+        for name in (n for n, b in bands.items() if b is None):
+            lines.append(f"  {name}: none (the record is too short or sampled too slowly for the bands)")
+        if shown:
+            first = next(iter(shown.values()))
+            lines.append(f"{'band Hz':>9}" + "".join(f"{name:>20}" for name in shown))
+            for i, label in enumerate(first.labels):
+                lines.append(f"{label:>9}" + "".join(f"{_fmt(b.rms_m_s2[i]):>12} ({b.level_db[i]:5.1f})"
+                                                     for b in shown.values()))
     return "\n".join(lines)
 
 
@@ -226,34 +246,51 @@ def _three_axes(args) -> int:
 
 def run(args) -> int:
     """``cleatfmu comfort``: returns the exit status; raises InputError for bad input."""
+    tau = args.mtvv_window_s
+    if not (math.isfinite(tau) and 0.01 <= tau <= 60.0):
+        raise InputError("--mtvv-window-s", f"an integration time of 0.01 to 60 s is needed, got {tau:g}")
+    if args.plot is not None:
+        check_output(args.plot, ".png", "--plot")
     if args.axes is not None:
         return _three_axes(args)
     exposure_h = _exposure_h(args.exposure_h, args.weighting)
-    names, fs, columns = read_acceleration_csv(args.acc)
+    names, fs, columns = read_acceleration_csv(args.acc, min_duration_s=tau)
     if args.column is not None:
         if args.column not in names:
             raise InputError("--column", f"{args.acc} has no column {args.column!r} (columns: {', '.join(names)})")
         names = [args.column]
-    from ..comfort.iso2631 import comfort, get_weighting
+    from ..comfort.iso2631 import comfort, get_weighting, weight
+    from ..comfort.spectra import third_octave
 
     weighting = get_weighting(args.weighting)
     if fs < 2.0 * weighting.band_hz[1]:
         raise InputError(args.acc, f"sampling rate {fs:.6g} Hz is too low for {weighting.name}: at least "
                                    f"{2.0 * weighting.band_hz[1]:g} Hz needed (twice the {weighting.band_hz[1]:g} Hz "
                                    f"upper end of its frequency range)")
-    results = {}
+    results, bands = {}, {}
     for name in names:
         try:
-            results[name] = comfort(columns[name], fs, weighting, exposure_h=exposure_h)
+            results[name] = comfort(columns[name], fs, weighting, exposure_h=exposure_h, tau_s=tau)
         except InputError as exc:
             raise InputError(args.acc, f"column {name}: {exc.problem}") from None
+        try:
+            bands[name] = third_octave(weight(columns[name], fs, weighting), fs, low_hz=weighting.band_hz[0],
+                                       high_hz=weighting.band_hz[1])
+        except InputError:
+            bands[name] = None
+    if args.plot is not None:
+        from ..report.plots import plot_third_octave, save_png
+
+        save_png(plot_third_octave(bands, title=f"{Path(args.acc).name}: {weighting.name}"), args.plot)
     if args.json:
-        docs = {name: r.to_json() for name, r in results.items()}
+        docs = {name: {**r.to_json(), "mtvv_window_s": tau,
+                       "third_octave": None if bands[name] is None else bands[name].to_json()}
+                for name, r in results.items()}
         if len(names) == 1:
             doc = {"file": str(args.acc), "column": names[0], **docs[names[0]]}
         else:
             doc = {"file": str(args.acc), "weighting": weighting.name, "sample_rate_hz": fs, "channels": docs}
         print(json_text(doc))
     else:
-        print(format_table(args.acc, weighting, results))
+        print(format_table(args.acc, weighting, results, bands if args.bands else None))
     return 0

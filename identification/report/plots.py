@@ -15,7 +15,7 @@ from .._files import atomic_write_bytes
 
 __all__ = ["figure", "save_png", "png_bytes", "plot_decay", "plot_log_peaks", "plot_comparison", "plot_diagnosis",
            "plot_tractor_diagnosis", "plot_impact_zooms", "plot_ride", "plot_k_c_vs_speed",
-           "plot_static"]
+           "plot_static", "plot_third_octave"]
 
 
 def figure(nrows=1, ncols=1, *, size=(9.0, 4.0), **kwargs):
@@ -313,5 +313,25 @@ def plot_static(result):
     ax2.legend(loc="best", fontsize=8)
     ax2.grid(alpha=0.3)
     fig.suptitle(f"{Path(result.source).name}: static stiffness from the compression test (eq. 18)")
+    fig.tight_layout()
+    return fig
+
+
+def plot_third_octave(bands: dict, *, title: str = ""):
+    """One-third-octave band RMS (dB re 1e-6 m/s²) of weighted accelerations, one bar series per column
+    (`bands`: name -> :class:`~identification.comfort.spectra.ThirdOctave` or None)."""
+    fig, ax = figure(1, 1, size=(10.0, 4.0))
+    shown = {name: b for name, b in bands.items() if b is not None}
+    width = 0.8 / max(1, len(shown))
+    for i, (name, b) in enumerate(shown.items()):
+        x = np.arange(b.centre_hz.size) + (i - (len(shown) - 1) / 2) * width
+        ax.bar(x, b.level_db, width=width, color=f"C{i}", label=name)
+    if shown:
+        first = next(iter(shown.values()))
+        ax.set_xticks(range(first.centre_hz.size), first.labels, rotation=90, fontsize=7)
+        ax.legend(loc="upper right", fontsize=8)
+    ax.set_xlabel("one-third-octave band centre / Hz")
+    ax.set_ylabel("weighted acceleration / dB re 1e-6 m/s²")
+    ax.set_title(title or "one-third-octave bands")
     fig.tight_layout()
     return fig
