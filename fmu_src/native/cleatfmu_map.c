@@ -109,7 +109,6 @@ static double interp(double x, const double *xp, const double *fp, size_t n) {
 int cleatfmu_map_outputs(double *v, const CleatfmuMap *map, char *msg, size_t n) {
     CleatfmuTireResult r;
     double speed = v[VR_SPEED], k, c, was = v[VR_EXTRAPOLATING];
-    size_t vr;
     k = interp(speed, map->speed, map->stiffness, map->n);
     c = interp(speed, map->speed, map->damping, map->n);
     cleatfmu_point_contact(v[VR_HUB_Z], v[VR_HUB_VZ], v[VR_ROAD_Z], v[VR_ROAD_VZ], k, c, v[VR_UNLOADED_RADIUS], &r);
@@ -120,18 +119,11 @@ int cleatfmu_map_outputs(double *v, const CleatfmuMap *map, char *msg, size_t n)
     v[VR_STIFFNESS] = k;
     v[VR_DAMPING] = c;
     v[VR_EXTRAPOLATING] = (speed < map->tested_low || speed > map->tested_high) ? 1.0 : 0.0;
-    for (vr = 0; vr < N_VARIABLES; vr++) {
-        if (cleatfmu_variables[vr].causality == VC_OUTPUT && !isfinite(v[vr])) {
-            snprintf(msg, n, "the outputs cannot be evaluated for these inputs and parameters (%s = %.17g)",
-                     cleatfmu_variables[vr].name, v[vr]);
-            return 1;
-        }
-    }
     if (v[VR_EXTRAPOLATING] != 0.0 && was == 0.0) {
         snprintf(msg, n, "speed %.6g m/s (%.4g km/h) is outside the map's tested range %.6g-%.6g m/s: k = %.6g N/m "
                          "and c = %.6g N.s/m are those of the nearest node (extrapolation)",
                  speed, 3.6 * speed, map->tested_low, map->tested_high, k, c);
-        return 2;
+        return 1;
     }
     return 0;
 }

@@ -31,8 +31,8 @@ typedef struct {
  * reason in msg. */
 int cleatfmu_map_load(const char *resource_location, CleatfmuMap **map, char *msg, size_t n);
 void cleatfmu_map_free(CleatfmuMap *map);
-/* The outputs (k, c at the speed, the force law, the extrapolation flag); returns 0, 1 when an output is
- * not finite, or 2 when the speed has just left the tested range (the warning in msg; outputs valid). */
+/* The outputs (k, c at the speed, the force law, the extrapolation flag); returns 1 with a warning in msg
+ * when the speed has just left the tested range, else 0. */
 int cleatfmu_map_outputs(double *v, const CleatfmuMap *map, char *msg, size_t n);
 #endif
 

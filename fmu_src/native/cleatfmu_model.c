@@ -153,8 +153,15 @@ int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_
 }
 #elif MODEL_MAP
 int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_t n) {
+    char warning[CLEATFMU_MESSAGE_SIZE];
+    int left = cleatfmu_map_outputs(v, (const CleatfmuMap *)data, warning, sizeof warning);
     (void)time;
-    return cleatfmu_map_outputs(v, (const CleatfmuMap *)data, msg, n);
+    if (outputs_finite(v, msg, n)) return 1;
+    if (left) {
+        snprintf(msg, n, "%s", warning);
+        return 2;
+    }
+    return 0;
 }
 #else
 int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_t n) {

@@ -57,7 +57,12 @@ def _check(args):
     from ..recording.plausibility import check_value
     from .util import normalize_tire
 
+    from ..recording import TIRES
+
     tires = None if args.tire is None else [normalize_tire(t) for t in args.tire]
+    for tire in tires or []:
+        if tire not in TIRES:
+            raise InputError("--tire", f"unknown tire {tire!r} ({', '.join(TIRES)})")
     if args.pressure_kpa is not None and not (math.isfinite(args.pressure_kpa) and args.pressure_kpa > 0):
         raise InputError("--pressure-kpa", f"a pressure > 0 kPa is expected, got {args.pressure_kpa:g}")
     if args.unloaded_radius_m is not None:

@@ -120,8 +120,7 @@ def map_of_reports(items, *, tires=None, pressure_kpa: float | None = None) -> d
     source = str(paths[0]) if len(paths) == 1 else f"{len(paths)} reports"
     if not runs:
         which = f" at {pressure_kpa:g} kPa" if pressure_kpa is not None else ""
-        raise InputError(paths[0] if len(paths) == 1 else None,
-                         f"no run with recommended k and c{which} in {source}: nothing to map")
+        raise InputError(source, f"no run with recommended k and c{which}: nothing to map")
     doc = fit_map(runs, source=source, values=VALUES)
     doc["sources"] = [str(p) for p in paths]
     return doc
