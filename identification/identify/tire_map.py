@@ -204,8 +204,10 @@ def _tire_map(tire: str, runs: list, source) -> dict:
                   "residuals": fit.residuals.tolist()}
         out["nodes"][q] = fit.value(nodes).tolist()
         out["nodes"][f"{q}_band"] = fit.band(nodes).tolist()
-        if min(out["nodes"][q]) <= 0.0 and q == "k" or min(out["nodes"][q]) < 0.0:
-            raise InputError(source, f"tire {tire}: the fitted {q} is not positive over the tested speeds")
+        lowest = min(out["nodes"][q])
+        if lowest < 0.0 or (q == "k" and lowest == 0.0):
+            raise InputError(source, f"tire {tire}: the fitted {q} is {'negative' if lowest < 0 else 'zero'} "
+                                     f"within the tested speeds ({lowest:g} {unit}): no map")
     return out
 
 
