@@ -24,7 +24,7 @@ def add_parser(subparsers) -> None:
     """Register ``cleatfmu map``."""
     p = subparsers.add_parser(
         "map", help="k and c of each tire as functions of speed, from reports of runs at several speeds",
-        description="Fit each tire's recommended k and c (with their 95 %% intervals) from the recordings of one or "
+        description="Fit each tire's recommended k and c (with their 95 % intervals) from the recordings of one or "
                     "more reports over speed (weighted least squares; linear, a quadratic where the runs demand "
                     "it; a between-run scatter where they disagree beyond their intervals) and write "
                     f"DIR/{MAP_JSON} and, per tire, DIR/tire_map_<TIRE>.fmu: the point-contact tire whose k and c "
