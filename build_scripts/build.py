@@ -22,6 +22,7 @@ import json
 import math
 import os
 import re
+import struct
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
@@ -241,7 +242,11 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
         Platforms of a native FMU (default: all, see :data:`build_scripts.native.PLATFORMS`).
     resources : dict of str to bytes, optional
         Further files of a native FMU's resources folder: the ``road_profile`` kind's table
-        (:data:`build_scripts.road_table.ROAD_FILE`; default :func:`build_scripts.road_table.default_road`).
+        (:data:`build_scripts.road_table.ROAD_FILE`; default :func:`build_scripts.road_table.default_road`),
+        the ``map_tire`` kind's (:data:`build_scripts.map_table.MAP_FILE`; default
+        :func:`build_scripts.map_table.default_map`; its hub starts at the static equilibrium under
+        :data:`build_scripts.native_fmu.DEFAULT_STATIC_LOAD_N` with the map's k at the start speed unless
+        ``hub_z`` is given).
 
     Returns
     -------
@@ -311,6 +316,8 @@ def _build_native(k, dest: Path, starts, given, provenance, description, fmi_ver
             raise ValueError(f"FMU kind {k.name}: the only resource is {ROAD_FILE}")
         resources.setdefault(ROAD_FILE, road_table_bytes(*default_road()))
         problem = None
+    elif "extrapolating" in k.names("output"):   # the tire map
+        starts, problem, resources = _map_starts(k, starts, given, resources)
     elif resources:
         raise ValueError(f"FMU kind {k.name} takes no resources")
     elif "stiffness" not in law:          # the body
@@ -322,6 +329,7 @@ def _build_native(k, dest: Path, starts, given, provenance, description, fmi_ver
         raise ValueError(f"FMU kind {k.name}: invalid start values: {problem}")
     if "stiffness" in law:
         starts = equilibrium_starts(k, starts, given)
+
     if description is None:
         description = k.native.get("description") or f"cleatfmu {k.name} tire (native C), SI units"
     data = native_fmu_bytes(k, starts, description=description, version=project_version(), fmi_version=fmi_version,
@@ -339,6 +347,34 @@ def _build_native(k, dest: Path, starts, given, provenance, description, fmi_ver
         tmp.unlink(missing_ok=True)
         raise
     return dest
+
+
+def _map_starts(k, starts: dict, given: dict, resources: dict) -> tuple:
+    """The tire map's start values (hub at the static equilibrium at the start speed unless given), the
+    problem of its table or None, and its resources (the default map when none is given)."""
+    import numpy as np
+
+    from identification.model.tire_law import value_problem
+
+    from .map_table import MAP_FILE, default_map, map_table_bytes, map_table_problem, read_map_table
+    from .native_fmu import DEFAULT_STATIC_LOAD_N
+
+    if set(resources) - {MAP_FILE}:
+        raise ValueError(f"FMU kind {k.name}: the only resource is {MAP_FILE}")
+    resources = {MAP_FILE: resources.get(MAP_FILE) or map_table_bytes(*default_map())}
+    try:
+        table = read_map_table(resources[MAP_FILE])
+    except (ValueError, IndexError, UnicodeDecodeError, struct.error):
+        return starts, f"{MAP_FILE} is not a tire map table", resources
+    problem = (map_table_problem(table["speed"], table["k"], table["c"], table["tested"])
+               or value_problem("unloaded radius", "m", starts["unloaded_radius"], strictly_positive=True))
+    if problem is not None:
+        return starts, problem, resources
+    out = dict(starts)
+    if "hub_z" not in given:
+        stiffness = float(np.interp(starts["speed"], table["speed"], table["k"]))
+        out["hub_z"] = starts["road_z"] + starts["unloaded_radius"] - DEFAULT_STATIC_LOAD_N / stiffness
+    return out, None, resources
 
 
 def _body_problem(params: dict) -> str | None:

@@ -15,10 +15,17 @@ import xml.etree.ElementTree as ET
 from .kinds import FmuKind
 from .units import base_unit_exponents
 
-__all__ = ["model_description_fmi3", "build_description_fmi3"]
+__all__ = ["model_description_fmi3", "build_description_fmi3", "log_categories"]
 
 _INITIAL_KINDS = {"constant": "constant"}
 _LOG_CATEGORIES = (("logStatusError", "Why a call failed (status error)"), ("logCalls", "Every FMI function call"))
+_WARNING_CATEGORY = ("logStatusWarning", "A value the model extrapolates (status warning): the tire map's speed "
+                                         "outside its tested range, once per excursion")
+
+
+def log_categories(kind: FmuKind) -> tuple:
+    """(name, description) of the log categories of a native FMU of `kind` (``native.warnings``: with warnings)."""
+    return _LOG_CATEGORIES + ((_WARNING_CATEGORY,) if kind.native.get("warnings") else ())
 
 
 def _dependencies(element: ET.Element, deps: list[tuple[int, str]], *, explicit: bool = False) -> None:
@@ -52,7 +59,7 @@ def model_description_fmi3(kind: FmuKind, starts: dict, *, description: str, ver
         unit = ET.SubElement(units, "Unit", {"name": name})
         ET.SubElement(unit, "BaseUnit", {k: str(e) for k, e in base_unit_exponents(name).items()})
     cats = ET.SubElement(root, "LogCategories")
-    for name, text in _LOG_CATEGORIES:
+    for name, text in log_categories(kind):
         ET.SubElement(cats, "Category", {"name": name, "description": text})
     start, stop, step = kind.native["default_experiment"]
     ET.SubElement(root, "DefaultExperiment", {"startTime": repr(float(start)), "stopTime": repr(float(stop)),

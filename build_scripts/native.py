@@ -1,7 +1,7 @@
 """Cross-compilation of the native (C) tire FMUs with zig, cached per platform and law version.
 
 The C sources live in ``fmu_src/native``: the tire law (``cleatfmu_law.c``),
-the tractor body (``cleatfmu_body.c``), the road profile (``cleatfmu_road.c``),
+the tractor body (``cleatfmu_body.c``), the road profile (``cleatfmu_road.c``), the tire map (``cleatfmu_map.c``),
 the model (``cleatfmu_model.c``), the resource reader (``cleatfmu_resources.c``)
 the instance (``cleatfmu_instance.c``) and the FMI layers
 (``fmi2_functions.c``, ``fmi3_functions.c``), one ``config.h`` per kind
@@ -48,7 +48,7 @@ PLATFORMS = {
 FMI_VERSIONS = tuple(PLATFORMS)
 
 _COMMON = ("cleatfmu_names.h", "cleatfmu_law.h", "cleatfmu_law.c", "cleatfmu_body.h", "cleatfmu_body.c", "cleatfmu_road.h",
-           "cleatfmu_road.c", "cleatfmu_model.h", "cleatfmu_model.c", "cleatfmu_resources.h",
+           "cleatfmu_road.c", "cleatfmu_map.h", "cleatfmu_map.c", "cleatfmu_model.h", "cleatfmu_model.c", "cleatfmu_resources.h",
            "cleatfmu_resources.c", "cleatfmu_instance.h", "cleatfmu_instance.c")
 _FMI_LAYER = {2: ("fmi2_functions.c",), 3: ("fmi3_functions.c", "fmi3_unsupported.c")}
 _FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),

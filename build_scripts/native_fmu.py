@@ -18,7 +18,7 @@ import xml.etree.ElementTree as ET
 
 from .kinds import FmuKind
 from .model_description import complete_model_description
-from .model_description3 import build_description_fmi3, model_description_fmi3
+from .model_description3 import build_description_fmi3, log_categories, model_description_fmi3
 from .native import PLATFORMS, c_sources, compile_binaries, source_files
 from .reproducible import GUID_PLACEHOLDER, content_guid, zip_bytes
 
@@ -94,8 +94,8 @@ def _base_model_description(kind: FmuKind, fmi_version: int, guid: str) -> bytes
     for name in c_sources(fmi_version):
         ET.SubElement(files, "File", {"name": name})
     cats = ET.SubElement(root, "LogCategories")
-    ET.SubElement(cats, "Category", {"name": "logStatusError", "description": "Why a call failed (status error)"})
-    ET.SubElement(cats, "Category", {"name": "logCalls", "description": "Every FMI function call"})
+    for name, text in log_categories(kind):
+        ET.SubElement(cats, "Category", {"name": name, "description": text})
     start, stop, step = kind.native["default_experiment"]
     ET.SubElement(root, "DefaultExperiment", {"startTime": repr(float(start)), "stopTime": repr(float(stop)),
                                                "stepSize": repr(float(step))})
@@ -138,7 +138,7 @@ def native_fmu_bytes(kind: FmuKind, starts: dict, *, description: str, version: 
     provenance : dict, optional
         Written to ``resources/provenance.json``.
     resources : dict of str to bytes, optional
-        Further files of the resources folder (the road's profile table).
+        Further files of the resources folder (the road's profile table, the tire map's table).
     """
     if fmi_version not in PLATFORMS:
         raise ValueError(f"FMI version {fmi_version} is not supported by the native backend "

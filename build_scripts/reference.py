@@ -263,6 +263,29 @@ def _tractor_body_closed_form(inputs: dict, starts: dict) -> dict:
     return out
 
 
+def _map_tire_run(t: np.ndarray, starts: dict) -> dict:
+    """The point-contact cleat run (:func:`_point_contact_cleat_run`, static deflection from the default map's k
+    at the start speed) while the speed ramps from 0.5 to 5 m/s: below, through and above the default map's
+    nodes and tested range (:func:`build_scripts.map_table.default_map`)."""
+    from .map_table import default_map
+
+    speed, k, _, _ = default_map()
+    run = _point_contact_cleat_run(t, dict(starts, stiffness=float(np.interp(starts["speed"], speed, k))))
+    return {**run, "speed": 0.5 + 9.0 * (t - t[0])}
+
+
+def _map_tire_closed_form(inputs: dict, starts: dict) -> dict:
+    """k, c = numpy.interp of the default map's nodes at the speed (held outside them); the point-contact law;
+    extrapolating outside the tested range."""
+    from .map_table import default_map
+
+    speed, k, c, (low, high) = default_map()
+    stiffness, damping = np.interp(inputs["speed"], speed, k), np.interp(inputs["speed"], speed, c)
+    out = _point_contact_closed_form(inputs, dict(starts, stiffness=stiffness, damping=damping))
+    return {**out, "stiffness": stiffness, "damping": damping,
+            "extrapolating": (inputs["speed"] < low) | (inputs["speed"] > high)}
+
+
 def _no_inputs(t: np.ndarray, starts: dict) -> dict:
     return {}
 
@@ -290,11 +313,12 @@ def _road_profile_closed_form(inputs: dict, starts: dict) -> dict:
 
 #: kind -> function(t, start values) returning the input signals of its default experiment.
 INPUT_SIGNALS = {"point_contact": _point_contact_cleat_run, "extended_tire": _extended_tire_cleat_run,
-                 "tractor_body": _tractor_body_forces, "road_profile": _no_inputs}
+                 "tractor_body": _tractor_body_forces, "road_profile": _no_inputs, "map_tire": _map_tire_run}
 #: kind -> function(inputs, start values) returning its outputs in closed form (``inputs["time"]``: the
 #: time of each output row).
 CLOSED_FORM = {"point_contact": _point_contact_closed_form, "extended_tire": _extended_tire_closed_form,
-               "tractor_body": _tractor_body_closed_form, "road_profile": _road_profile_closed_form}
+               "tractor_body": _tractor_body_closed_form, "road_profile": _road_profile_closed_form,
+               "map_tire": _map_tire_closed_form}
 
 
 def reference_path(kind) -> Path:

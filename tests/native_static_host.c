@@ -1,9 +1,9 @@
 /* Every cleatfmu FMU kind linked statically into this one program, each compiled from its FMU's sources/
- * with FMI2_FUNCTION_PREFIX set to its own prefix (pc_, ext_, body_, road_).
+ * with FMI2_FUNCTION_PREFIX set to its own prefix (pc_, ext_, body_, road_, map_).
  *
  *   native_static_host KIND RESOURCE_URI GUID STEPS STEP_S VR...
  *
- * instantiates KIND (pc, ext, body or road) as a co-simulation slave, initializes it at t = 0 with its
+ * instantiates KIND (pc, ext, body, road or map) as a co-simulation slave, initializes it at t = 0 with its
  * default values, and prints the outputs VR... after initialization and after each of STEPS steps
  * (one line per point, %.17g).  Exit status 1 on any FMI error. */
 #include <stdio.h>
@@ -27,6 +27,7 @@ DECLARE(pc_)
 DECLARE(ext_)
 DECLARE(body_)
 DECLARE(road_)
+DECLARE(map_)
 
 typedef struct {
     const char *name;
@@ -45,7 +46,8 @@ typedef struct {
                        P##fmi2ExitInitializationMode, P##fmi2DoStep, P##fmi2GetReal, P##fmi2Terminate,     \
                        P##fmi2FreeInstance}
 
-static const Kind KINDS[] = {KIND(pc_, "pc"), KIND(ext_, "ext"), KIND(body_, "body"), KIND(road_, "road")};
+static const Kind KINDS[] = {KIND(pc_, "pc"), KIND(ext_, "ext"), KIND(body_, "body"), KIND(road_, "road"),
+                             KIND(map_, "map")};
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
                    fmi2String message, ...) {

@@ -469,7 +469,7 @@ def test_an_fmu_state_of_another_kind_or_corrupted_is_refused(native_fmus):
 
 
 def test_every_kind_links_statically_into_one_program_from_its_sources(tmp_path):
-    """The four kinds' sources/ (the files their model descriptions list), each compiled with its own
+    """The five kinds' sources/ (the files their model descriptions list), each compiled with its own
     FMI2_FUNCTION_PREFIX and warnings as errors, link into one C program without a clash (the shared names
     are the kind's own), and each kind run there gives its FMU's outputs (fmpy, the shipped binary)."""
     import shutil
@@ -481,7 +481,8 @@ def test_every_kind_links_statically_into_one_program_from_its_sources(tmp_path)
     gcc = shutil.which("gcc")
     if gcc is None:
         pytest.skip("gcc is not installed")
-    kinds = {"point_contact": "pc", "extended_tire": "ext", "tractor_body": "body", "road_profile": "road"}
+    kinds = {"point_contact": "pc", "extended_tire": "ext", "tractor_body": "body", "road_profile": "road",
+             "map_tire": "map"}
     objects, runs = [], {}
     for kind, prefix in kinds.items():
         fmu = build_fmu(kind, tmp_path / f"{kind}.fmu", backend="native")
@@ -530,7 +531,7 @@ def test_every_kind_links_statically_into_one_program_from_its_sources(tmp_path)
 
 
 def test_every_kind_compiles_for_fmi3_with_its_own_prefix_and_no_shared_global_name(tmp_path):
-    """FMI 3.0: the four kinds' sources/ (their buildDescription.xml's files), each with its own
+    """FMI 3.0: the five kinds' sources/ (their buildDescription.xml's files), each with its own
     FMI3_FUNCTION_PREFIX, define no global symbol twice between them, and every FMI function carries its
     kind's prefix (``nm`` on the objects)."""
     import shutil
@@ -541,7 +542,7 @@ def test_every_kind_compiles_for_fmi3_with_its_own_prefix_and_no_shared_global_n
         pytest.skip("gcc or nm is not installed")
     owners = {}
     for kind, prefix in {"point_contact": "pc", "extended_tire": "ext", "tractor_body": "body",
-                         "road_profile": "road"}.items():
+                         "road_profile": "road", "map_tire": "map"}.items():
         fmu = build_fmu(kind, tmp_path / f"{kind}.fmu", backend="native", fmi_version=3)
         folder = extract(fmu, tmp_path / kind)
         description = (folder / "sources" / "buildDescription.xml").read_text()
@@ -558,4 +559,4 @@ def test_every_kind_compiles_for_fmi3_with_its_own_prefix_and_no_shared_global_n
                 assert symbol not in owners, (symbol, owners.get(symbol), kind)
                 owners[symbol] = kind
                 assert not symbol.startswith("fmi3"), (kind, symbol)      # prefixed: pc_fmi3DoStep, ...
-    assert {"pc_fmi3DoStep", "ext_fmi3DoStep", "body_fmi3DoStep", "road_fmi3DoStep"} <= set(owners)
+    assert {"pc_fmi3DoStep", "ext_fmi3DoStep", "body_fmi3DoStep", "road_fmi3DoStep", "map_fmi3DoStep"} <= set(owners)

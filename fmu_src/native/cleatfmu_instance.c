@@ -84,6 +84,10 @@ int ci_fail(CleatfmuInstance *s, const char *fmt, ...) {
     return CI_ERROR;
 }
 
+void ci_warn(CleatfmuInstance *s, const char *text) {
+    if (s->log_warnings && s->log) s->log(s, CI_WARNING, "logStatusWarning", text);
+}
+
 int ci_allowed(CleatfmuInstance *s, const char *function, int modes) {
     if (s == NULL) return 0;
     if (!(s->mode & modes)) {
@@ -98,12 +102,15 @@ int ci_set_debug_logging(CleatfmuInstance *s, int on, size_t n, const char *cons
     size_t i;
     if (n == 0) {
         s->log_errors = s->log_calls = on ? 1 : 0;
+        s->log_warnings = MODEL_MAP && on;
         return CI_OK;
     }
     if (categories == NULL) return ci_fail(s, "SetDebugLogging: NULL categories");
     for (i = 0; i < n; i++) {
         if (categories[i] && strcmp(categories[i], "logStatusError") == 0) s->log_errors = on ? 1 : 0;
         else if (categories[i] && strcmp(categories[i], "logCalls") == 0) s->log_calls = on ? 1 : 0;
+        else if (MODEL_MAP && categories[i] && strcmp(categories[i], "logStatusWarning") == 0)
+            s->log_warnings = on ? 1 : 0;
         else return ci_fail(s, "SetDebugLogging: unknown log category %s", categories[i] ? categories[i] : "NULL");
     }
     return CI_OK;
@@ -120,10 +127,13 @@ int ci_check_parameters(CleatfmuInstance *s) {
 
 static int update(CleatfmuInstance *s) {
     char msg[CLEATFMU_MESSAGE_SIZE];
+    int rc;
     if (!s->stale) return CI_OK;
     if (ci_check_parameters(s) != CI_OK) return CI_ERROR;
-    if (cleatfmu_evaluate(s->values, s->time, s->data, msg, sizeof msg)) return ci_fail(s, "%s", msg);
+    rc = cleatfmu_evaluate(s->values, s->time, s->data, msg, sizeof msg);
+    if (rc == 1) return ci_fail(s, "%s", msg);
     s->stale = 0;
+    if (rc == 2) ci_warn(s, msg);
     return CI_OK;
 }
 

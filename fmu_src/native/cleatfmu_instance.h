@@ -19,6 +19,7 @@
 #define CI_VR_TIME N_VARIABLES
 
 #define CI_OK 0
+#define CI_WARNING 1
 #define CI_ERROR 3
 
 typedef enum {
@@ -41,7 +42,7 @@ typedef struct CleatfmuInstance {
     void *environment;             /* the importer's environment pointer */
     void (*free_memory)(void *);   /* frees this instance (the importer's, or free) */
     char name[128];
-    int log_errors, log_calls;
+    int log_errors, log_calls, log_warnings;
     CleatfmuMode mode;
     double time;
     int stale, unchecked;
@@ -59,9 +60,12 @@ int ci_load(CleatfmuInstance *s, const char *token, const char *resource_locatio
 void ci_free(CleatfmuInstance *s);
 /* Log a formatted error (category logStatusError) and return CI_ERROR. */
 int ci_fail(CleatfmuInstance *s, const char *fmt, ...);
+/* Log a warning (status warning, category logStatusWarning); the call that found it still succeeds. */
+void ci_warn(CleatfmuInstance *s, const char *text);
 /* Is `s` an instance in one of `modes`?  Logs the call (logCalls) or the violation. */
 int ci_allowed(CleatfmuInstance *s, const char *function, int modes);
-/* Set log categories: n == 0 sets all; returns CI_OK or CI_ERROR for an unknown category. */
+/* Set log categories (logStatusError, logCalls; and logStatusWarning for a kind that warns, the tire map):
+ * n == 0 sets all; returns CI_OK or CI_ERROR for an unknown category. */
 int ci_set_debug_logging(CleatfmuInstance *s, int on, size_t n, const char *const categories[]);
 int ci_check_parameters(CleatfmuInstance *s);
 int ci_reset(CleatfmuInstance *s);

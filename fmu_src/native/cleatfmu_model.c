@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "cleatfmu_model.h"
-#if !MODEL_BODY && !MODEL_ROAD
+#if !MODEL_BODY && !MODEL_ROAD && !MODEL_MAP
 #include "cleatfmu_law.h"
 #endif
 
@@ -84,6 +84,9 @@ int cleatfmu_set_problem(const double *values, char *msg, size_t n) {
 #if MODEL_ROAD
 #include "cleatfmu_road.h"
 #endif
+#if MODEL_MAP
+#include "cleatfmu_map.h"
+#endif
 
 static int outputs_finite(const double *v, char *msg, size_t n) {
     size_t vr;
@@ -103,6 +106,12 @@ int cleatfmu_load(const char *resource_location, void **data, char *msg, size_t 
 }
 
 void cleatfmu_unload(void *data) { cleatfmu_road_free((CleatfmuRoad *)data); }
+#elif MODEL_MAP
+int cleatfmu_load(const char *resource_location, void **data, char *msg, size_t n) {
+    return cleatfmu_map_load(resource_location, (CleatfmuMap **)data, msg, n);
+}
+
+void cleatfmu_unload(void *data) { cleatfmu_map_free((CleatfmuMap *)data); }
 #else
 int cleatfmu_load(const char *resource_location, void **data, char *msg, size_t n) {
     (void)resource_location; (void)msg; (void)n;
@@ -141,6 +150,18 @@ int cleatfmu_step(double *v, double time, double step, char *msg, size_t n) {
 int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_t n) {
     cleatfmu_road_outputs(v, time, (const CleatfmuRoad *)data);
     return outputs_finite(v, msg, n);
+}
+#elif MODEL_MAP
+int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_t n) {
+    char warning[CLEATFMU_MESSAGE_SIZE];
+    int left = cleatfmu_map_outputs(v, (const CleatfmuMap *)data, warning, sizeof warning);
+    (void)time;
+    if (outputs_finite(v, msg, n)) return 1;
+    if (left) {
+        snprintf(msg, n, "%s", warning);
+        return 2;
+    }
+    return 0;
 }
 #else
 int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_t n) {

@@ -4,7 +4,7 @@
  * 0.0 or 1.0); a kind with a state (the body) keeps it hidden in N_STATES more
  * doubles after the variables.  The kind's config.h defines MODEL_IDENTIFIER,
  * MODEL_KIND, N_VARIABLES, the VR_* value references and the variable table
- * (and optionally MODEL_BODY, MODEL_ROAD, N_STATES, MODEL_FIXED_PARAMETERS).
+ * (and optionally MODEL_BODY, MODEL_ROAD, MODEL_MAP, N_STATES, MODEL_FIXED_PARAMETERS).
  */
 #ifndef CLEATFMU_MODEL_H
 #define CLEATFMU_MODEL_H
@@ -34,6 +34,9 @@ typedef struct {
 #ifndef MODEL_ROAD
 #define MODEL_ROAD 0
 #endif
+#ifndef MODEL_MAP
+#define MODEL_MAP 0
+#endif
 #ifndef N_STATES
 #define N_STATES 0
 #endif
@@ -54,13 +57,15 @@ extern const CleatfmuVariable cleatfmu_variables[N_VARIABLES];
 int cleatfmu_value_problem(size_t vr, double value, char *msg, size_t n);
 /* Why a complete set of values is invalid together (message into msg), or 0. */
 int cleatfmu_set_problem(const double *values, char *msg, size_t n);
-/* Load the kind's data from the FMU's resources (the road's profile) into *data (NULL for a kind without);
+/* Load the kind's data from the FMU's resources (the road's profile, the tire map) into *data (NULL for a kind
+ * without);
  * returns 0, or 1 with the reason in msg. */
 int cleatfmu_load(const char *resource_location, void **data, char *msg, size_t n);
 /* Free what cleatfmu_load allocated. */
 void cleatfmu_unload(void *data);
-/* Compute the outputs into values at `time` (with the kind's data); nonzero (message into msg) when an
- * output is not finite. */
+/* Compute the outputs into values at `time` (with the kind's data): 0; 1 (message into msg) when an
+ * output is not finite; 2 with a warning in msg, the outputs valid (the tire map: a speed that has just
+ * left the tested range). */
 int cleatfmu_evaluate(double *values, double time, const void *data, char *msg, size_t n);
 /* Advance the hidden state over the step [time, time + step] (nothing for a stateless kind);
  * nonzero (message into msg) when the state becomes non-finite. */

@@ -81,6 +81,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return NULL;
     }
     probe.log_errors = loggingOn ? 1 : 0; /* nothing is logged unless the importer asks for it */
+    probe.log_warnings = MODEL_MAP && loggingOn;
     if (functions->allocateMemory && functions->freeMemory) {
         s = (CleatfmuInstance *)functions->allocateMemory(1, sizeof *s);
         probe.free_memory = functions->freeMemory;

@@ -69,6 +69,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
         return NULL;
     }
     probe.log_errors = loggingOn ? 1 : 0; /* nothing is logged unless the importer asks for it */
+    probe.log_warnings = MODEL_MAP && loggingOn;
     s = (CleatfmuInstance *)calloc(1, sizeof *s);
     if (s == NULL) {
         cleatfmu_unload(probe.data);

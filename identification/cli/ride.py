@@ -38,7 +38,8 @@ def add_parser(subparsers) -> None:
                    help="parameter sets, comma-separated: paper, waveform, final, static=K (K in N/m, or a "
                         "compression test CSV as for the static command), fmu=DIR (the k, c of the four tire "
                         "FMUs in DIR, *_FL.fmu .. *_RR.fmu, as exported; in a report's fmu/ the recording's), params=FILE (the k, c of an "
-                        "'identify --json' file of the four tires); "
+                        "'identify --json' file of the four tires), map=FILE (the k, c of a 'cleatfmu map' tire map at the "
+                        "ride's speed; outside its tested speeds an extrapolation, warned of); "
                         f"default {DEFAULT_COMPARE})")
     p.add_argument("--body", metavar="DIAG.json", default=None,
                    help="take the body and the final k, c from a 'cleatfmu diagnose --json' document or a report's "
@@ -130,6 +131,10 @@ def run(args) -> int:
                                 seat_height_m=args.seat_height_m, body_doc=args.body)
     speed, seat_x, how = doc["speed_m_s"], doc["seat"]["x_m"], doc["body"]["source"]
     for name, entry in doc["sets"].items():
+        outside = [t for t, v in entry.get("map", {}).items() if v["extrapolation"]]
+        if outside:
+            print(f"cleatfmu: warning: set {name}: {speed * 3.6:.3g} km/h is outside the map's tested speeds of "
+                  f"{', '.join(outside)}: their k, c are extrapolated (held at the nearest node)", file=sys.stderr)
         if entry["expected"]["contact"]["warning"]:
             print(f"cleatfmu: warning: set {name}: {entry['expected']['contact']['warning']}", file=sys.stderr)
     if args.plot:

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..identify.tire_map import map_set
 from ..model.ride import RAMP_M, RideModel, ride_model, seat_row
 from ..model.tractor import Body, TractorModel
 
@@ -189,7 +190,7 @@ def _documented_body(rec, body_doc, source) -> tuple:
     return body, final, f"{what} of {PureWindowsPath(source).name} (diagnosed from {origin})"
 
 
-def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1, body_doc=None) -> tuple:
+def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1, body_doc=None, speed_m_s=None) -> tuple:
     """The tractor's body and tire parameter sets to ride with, from a whole-tractor recording.
 
     Parameters
@@ -200,7 +201,8 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1, body_doc=Non
         ``final`` (the joint diagnosis's named model), ``paper`` (the paper's method per tire),
         ``waveform`` (the waveform fit per tire), ``static=K`` (every tire at K N/m, e.g. a compression
         test's, with the final model's c), ``fmu=DIR`` (the k and c the four tire FMUs in DIR carry),
-        ``params=FILE`` (the k and c of an ``identify --json`` document of the four tires).
+        ``params=FILE`` (the k and c of an ``identify --json`` document of the four tires), ``map=FILE`` (the
+        k and c of a ``cleatfmu map`` tire map at `speed_m_s`).
     diagnosis : TractorDiagnosis, optional
         The recording's joint diagnosis (run when neither it nor `body_doc` is given).
     workers : int
@@ -208,6 +210,8 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1, body_doc=Non
     body_doc : dict or path-like, optional
         A ``diagnose --json`` document or a report's ``summary.json`` (its entry of `rec`): the body and the
         final k, c are taken from it, and no diagnosis is run.
+    speed_m_s : float, optional
+        The ride's speed, for ``map=FILE`` (default: the recording's).
 
     Returns
     -------
@@ -243,6 +247,8 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1, body_doc=Non
             sets[name] = _fmu_set(name, recording=rec.source)
         elif name.startswith("params="):
             sets[name] = _params_set(name)
+        elif name.startswith("map="):
+            sets[name] = map_set(name[4:], rec.speed_m_s if speed_m_s is None else speed_m_s, TIRES)[:2]
         elif name in ("paper", "waveform"):
             if name == "paper":
                 from ..identify.paper import identify as method
@@ -271,9 +277,12 @@ def check_set_names(names, *, recording=None) -> list:
             _fmu_set(name, recording=recording)
         elif name.startswith("params="):
             _params_set(name)
+        elif name.startswith("map="):
+            from ..recording import TIRES
+            map_set(name[4:], None, TIRES)
         elif name not in ("paper", "waveform", "final"):
             raise InputError("--compare", f"unknown parameter set {name!r} (paper, waveform, final, static=K, "
-                                          f"fmu=DIR, params=FILE)")
+                                          f"fmu=DIR, params=FILE, map=FILE)")
     return names
 
 
@@ -362,7 +371,8 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
 
     seeds = realisation_seeds(seed, realisations)
     speed = rec.speed_m_s if speed_m_s is None else float(speed_m_s)
-    body, sets, how = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers, body_doc=body_doc)
+    body, sets, how = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers, body_doc=body_doc,
+                                     speed_m_s=speed)
     every = []
     for s in seeds:
         road_s = road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M, s)
@@ -389,6 +399,8 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
         doc["sets"][name]["expected"] = expected_set(per_ride, body=body, k=k, c=c, row=rows["z"], road=road,
                                                      speed_m_s=speed, seeds=seeds, rows=rows)
         doc["sets"][name]["expected"]["contact"] = contact_summary([e[name].contact for e in every], body.tires)
+        if name.startswith("map="):      # the map's values at the speed, with their bands and extrapolation
+            doc["sets"][name]["map"] = map_set(name[4:], speed, body.tires)[2]
     if ssp_dir is not None:
         from .ride_ssp import write_ride_ssps
         paths = write_ride_ssps(ssp_dir, body, sets, road=road, speed_m_s=speed, duration_s=duration_s,

@@ -16,6 +16,8 @@ Ranges (:data:`RANGES`; bounds inclusive):
 * ``cleat_width_mm`` 5-1000 mm, in the driving direction;
 * ``wheelbase_m`` 0.5-10 m: compact tractor to articulated 4WD;
 * ``wheel_load_kN`` 0.1-100 kN per wheel (10 kg to 10 t);
+* ``inflation_pressure_kPa`` 20-1000 kPa (optional): very low pressure tires to implement tires
+  (a pressure in bar or Pa written as kPa is refused);
 * ``sampling_rate_hz`` 50 Hz-100 kHz: the tire's mode (2-20 Hz) sampled
   well, up to an impact recorder;
 * ``highpass_hz`` 0-10 Hz: the acquisition's AC coupling, below the tire's mode;
@@ -92,6 +94,7 @@ RANGES: dict[str, Range] = {
     "cleat_width_mm": Range(5.0, 1000.0, "mm", "a cleat's width in the driving direction"),
     "wheelbase_m": Range(0.5, 10.0, "m", "a tractor's wheelbase"),
     "wheel_load_kN": Range(0.1, 100.0, "kN", "a tractor wheel's static load"),
+    "inflation_pressure_kPa": Range(20.0, 1000.0, "kPa", "a tractor tire's inflation pressure"),
     "sampling_rate_hz": Range(50.0, 100e3, "Hz", "a hub accelerometer's sampling rate"),
     "highpass_hz": Range(0.0, 10.0, "Hz", "an AC coupling's corner, below the tire's mode"),
     "peak_accel_m_s2": Range(0.01, 1e6, "m/s^2", "a hub's largest acceleration in a cleat run, in m/s^2"),

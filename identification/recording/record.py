@@ -17,7 +17,10 @@ A recording is two files with the same stem:
     "cleat_height_mm": float > 0, "cleat_width_mm": float > 0,
     "wheelbase_m": float > 0, "wheel_load_kN": {"FL": float > 0, ...},
     "description": str (optional), "acquisition": {...} (optional),
-    "cleat_profile": "rectangular" | {"bevel_mm": b} | [[x_mm, z_mm], ...] (optional)}``.
+    "cleat_profile": "rectangular" | {"bevel_mm": b} | [[x_mm, z_mm], ...] (optional),
+    "inflation_pressure_kPa": float > 0 | {"FL": float > 0, ...} (optional)}``.
+    ``inflation_pressure_kPa`` is the tires' inflation pressure (gauge, kPa): one number for every tire, or
+    one per channel (then every channel needs one).
     ``cleat_profile`` is the cleat's cross-section (:mod:`identification.recording.cleat`; absent: rectangular).
     ``wheel_load_kN`` holds the static wheel load of every channel (kN).
     ``acquisition`` describes the channels' analog chain:
@@ -72,7 +75,9 @@ REAR_TIRES = ("RL", "RR")
 STANDARD_GRAVITY = 9.80665
 
 _POSITIVE_KEYS = ("speed_kmh", "cleat_height_mm", "cleat_width_mm", "wheelbase_m")
-_KNOWN_KEYS = {"format", "description", "wheel_load_kN", "acquisition", "cleat_profile", *_POSITIVE_KEYS}
+_PRESSURE_KEY = "inflation_pressure_kPa"
+_KNOWN_KEYS = {"format", "description", "wheel_load_kN", "acquisition", "cleat_profile", _PRESSURE_KEY,
+               *_POSITIVE_KEYS}
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,6 +118,8 @@ class Recording:
     conditioning : dict or None
         What :func:`identification.recording.condition.condition` found and removed (offsets, engine lines, flipped
         signs, the speed from the front/rear delay); None: not conditioned.
+    inflation_pressure_Pa : dict of str to float or None
+        Inflation pressure (gauge) per channel, Pa, when the sidecar gives it (``inflation_pressure_kPa``).
     """
 
     time_s: np.ndarray
@@ -130,6 +137,7 @@ class Recording:
     decimated_from_hz: float | None = None
     cleat_profile: Any = None
     conditioning: dict | None = None
+    inflation_pressure_Pa: dict[str, float] | None = None
 
     def __post_init__(self):
         check_time(self.source, np.asarray(self.time_s, dtype=float))
@@ -188,6 +196,8 @@ class Recording:
             meta["acquisition"] = self.acquisition.to_json()
         if self.cleat_profile is not None:
             meta["cleat_profile"] = self.cleat_profile.to_json()
+        if self.inflation_pressure_Pa is not None:
+            meta[_PRESSURE_KEY] = {t: self.inflation_pressure_Pa[t] / 1e3 for t in self.tires}
         meta.update(self.extra)
         return meta
 
@@ -241,6 +251,12 @@ def read_recording(csv_path: str | Path) -> Recording:
     for name in names:
         if name not in loads:
             raise InputError(meta_path, f"wheel_load_kN has no entry for channel {name}")
+    pressure = meta.get(_PRESSURE_KEY)
+    if isinstance(pressure, dict):
+        for name in names:
+            if name not in pressure:
+                raise InputError(meta_path, f"{_PRESSURE_KEY} has no entry for channel {name} (one number for "
+                                            f"every tire, or one per channel)")
     return Recording(
         time_s=data[0],
         accel_m_s2={n: data[i + 1] for i, n in enumerate(names)},
@@ -254,6 +270,8 @@ def read_recording(csv_path: str | Path) -> Recording:
         source=str(csv_path),
         acquisition=acquisition_from_sidecar(meta_path, meta["acquisition"]) if "acquisition" in meta else None,
         cleat_profile=_profile(meta, meta_path),
+        inflation_pressure_Pa=None if pressure is None else
+        {n: 1e3 * (pressure[n] if isinstance(pressure, dict) else pressure) for n in names},
     )
 
 
@@ -313,6 +331,8 @@ def _read_sidecar(path: Path) -> dict[str, Any]:
             out_of_range("wheel_load_kN", loads[name], label=f"wheel_load_kN.{name}", hint=_hint("wheel_load_kN"))
         if problem:
             raise InputError(path, problem)
+    if _PRESSURE_KEY in meta:
+        meta[_PRESSURE_KEY] = _pressure(path, meta[_PRESSURE_KEY], _PRESSURE_KEY in waived)
     if "description" in meta and not isinstance(meta["description"], str):
         raise InputError(path, "description must be a string")
     acq = meta.get("acquisition")
@@ -330,8 +350,30 @@ def _read_sidecar(path: Path) -> dict[str, Any]:
     return meta
 
 
+def _pressure(path: Path, value: Any, waived: bool):
+    """The sidecar's ``inflation_pressure_kPa`` checked: one number > 0, or ``{TIRE: number > 0}``."""
+    key = _PRESSURE_KEY
+    if isinstance(value, dict) and value:
+        for name in value:
+            if name not in TIRES:
+                raise InputError(path, f"{key}: unknown tire {name!r} (allowed: {', '.join(TIRES)})")
+        return {name: _one_pressure(path, f"{key}.{name}", v, waived) for name, v in value.items()}
+    if not _is_number(value):
+        raise InputError(path, f"{key} must be a number (kPa) or an object such as {{\"FL\": 160}}, "
+                               f"got {json.dumps(value)}")
+    return _one_pressure(path, key, value, waived)
+
+
+def _one_pressure(path: Path, label: str, value: Any, waived: bool) -> float:
+    number = _positive(path, label, value)
+    problem = None if waived else out_of_range(_PRESSURE_KEY, number, label=label, hint=_hint(_PRESSURE_KEY))
+    if problem:
+        raise InputError(path, problem)
+    return number
+
+
 #: Quantities of a recording that its sidecar may accept out of their plausible range (``"out_of_range_ok"``).
-WAIVABLE = (*_POSITIVE_KEYS, "wheel_load_kN", "sampling_rate_hz", "highpass_hz")
+WAIVABLE = (*_POSITIVE_KEYS, "wheel_load_kN", _PRESSURE_KEY, "sampling_rate_hz", "highpass_hz")
 
 
 def _waived(path: Path, value: Any) -> frozenset:

@@ -73,6 +73,7 @@ class RecordingReport:
     error: str | None = None
     speed_kmh: float | None = None
     sample_rate_hz: float | None = None
+    conditions: dict | None = None                   # what the run was tested at (tire_map.run_conditions)
     tires: list = field(default_factory=list)        # TireReport, file order
     diagnosis: DiagnosisReport | None = None
 
@@ -294,6 +295,7 @@ def _read_all(paths, out_dir: Path):
         No recording can be read (the first one's problem, and how many more failed).
     """
     from ..recording import read_recording
+    from .tire_map import run_conditions
 
     reports, jobs, stems, order = [], [], set(), {}
     for path in paths:
@@ -312,6 +314,7 @@ def _read_all(paths, out_dir: Path):
         jobs.insert(0, ("recording", str(path), stem, str(out_dir)))
         jobs += [("tire", str(path), stem, tire, str(out_dir)) for tire in rec.tires]
         order[stem] = list(rec.tires)
+        reports[-1].conditions = run_conditions(rec)
     if reports and not jobs:
         more = f" (and {len(reports) - 1} more recording(s) that cannot be read)" if len(reports) > 1 else ""
         raise InputError(reports[0].source, reports[0].error + more)

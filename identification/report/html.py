@@ -340,7 +340,8 @@ def summary_document(result: BatchResult) -> dict:
                            point_contact_fmu=files["point_contact_fmus"].get(t.tire))
             tires[t.tire] = {"recommended": rec, "paper": t.paper, "waveform": t.waveform, "simulate": t.simulate,
                              "fmus": t.fmus, "errors": t.errors}
-        recordings.append({"name": r.stem, "source": r.source, "ok": r.ok, "error": r.error, **files,
+        recordings.append({"name": r.stem, "source": r.source, "ok": r.ok, "error": r.error,
+                           "conditions": r.conditions, **files,
                            "diagnosis": r.diagnosis.diagnosis if r.diagnosis is not None else None,
                            "diagnosis_fmus": r.diagnosis.fmus if r.diagnosis is not None else [],
                            "diagnosis_errors": r.diagnosis.errors if r.diagnosis is not None else [],
