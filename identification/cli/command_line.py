@@ -141,8 +141,64 @@ class Terminated(BaseException):
 EXIT_TERMINATED = 143
 
 
+#: The exit status of a signal that came while the command ran (0: none): a library that catches the
+#: exception a signal raised and raises its own (a compiler wrapping it) still ends as that signal's run.
+_signalled = 0
+
+
+#: Seconds a terminated command has to unwind before it is ended where it stands (its run folder removed).
+TERMINATE_GRACE_S = 3.0
+#: The run's private temporary folder (every temporary file and folder of the run is made inside it).
+_run_tmp = None
+
+
+def _force_exit() -> None:
+    """End a terminated run that did not unwind in time (a library holding a lock the unwinding needs)."""
+    import shutil
+
+    if _run_tmp is not None:
+        shutil.rmtree(_run_tmp, ignore_errors=True)
+    try:
+        sys.stderr.write("cleatfmu: terminated\n")
+        sys.stderr.flush()
+    finally:
+        os._exit(EXIT_TERMINATED)
+
+
+_STDLIB = os.path.dirname(os.__file__)
+
+
+def _in_the_standard_library(frame) -> bool:
+    """Whether `frame` runs the standard library's own code (its locks, its fork handlers), where an
+    exception raised by a signal handler is ignored or leaves a lock held."""
+    name = frame.f_code.co_filename if frame is not None else ""
+    return name.startswith("<frozen") or (name.startswith(_STDLIB) and "site-packages" not in name)
+
+
 def _raise_terminated(signum, frame):
+    """SIGTERM (and its retries on SIGALRM): raise :class:`Terminated` where the command is; in the standard
+    library's own code, try again 20 ms later; after :data:`TERMINATE_GRACE_S` end the run where it stands."""
+    global _signalled
+    if signum == signal.SIGALRM and _signalled != EXIT_TERMINATED:
+        return
+    if not _signalled:
+        import threading
+
+        timer = threading.Timer(TERMINATE_GRACE_S, _force_exit)
+        timer.daemon = True
+        timer.start()
+        signal.signal(signal.SIGALRM, _raise_terminated)
+    _signalled = EXIT_TERMINATED
+    if _in_the_standard_library(frame):
+        signal.setitimer(signal.ITIMER_REAL, 0.02)
+        return
     raise Terminated()
+
+
+def _raise_interrupt(signum, frame):
+    global _signalled
+    _signalled = 130
+    raise KeyboardInterrupt
 
 
 def _catch_sigterm():
@@ -164,7 +220,7 @@ def _answer_early_interrupt() -> None:
     import identification
 
     if signal.getsignal(signal.SIGINT) is identification._defer_interrupt:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGINT, _raise_interrupt)
     early, identification._interrupted = identification._interrupted, 0
     if early == signal.SIGINT:
         raise KeyboardInterrupt
@@ -232,6 +288,14 @@ def main(argv=None) -> int:
         print("cleatfmu: error: stdout: closed (the result would be lost); redirect it to a file or a pipe",
               file=sys.stderr)
         return 2
+    global _signalled, _run_tmp
+    import shutil
+    import tempfile
+
+    _signalled = 0
+    saved_tmp = tempfile.tempdir
+    _run_tmp = tempfile.mkdtemp(prefix=f"cleatfmu_run_{os.getpid()}_")
+    tempfile.tempdir = _run_tmp        # the run's temporary files, in one folder removed at the end
     previous = _catch_sigterm()
     try:
         _answer_early_interrupt()
@@ -247,9 +311,20 @@ def main(argv=None) -> int:
     except Terminated:
         print("cleatfmu: terminated", file=sys.stderr)
         return EXIT_TERMINATED
+    except Exception:
+        if not _signalled:
+            raise
+        print("cleatfmu: " + ("terminated" if _signalled == EXIT_TERMINATED else "interrupted"), file=sys.stderr)
+        return _signalled
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
+        if _signalled == EXIT_TERMINATED:          # no retry of SIGTERM may outlive the run
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, signal.SIG_DFL)
+        tempfile.tempdir = saved_tmp
+        shutil.rmtree(_run_tmp, ignore_errors=True)
+        _run_tmp = None
 
 
 if __name__ == "__main__":  # pragma: no cover
