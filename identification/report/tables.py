@@ -19,7 +19,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["Table", "verdict_table", "verdict_heads", "campaign_table", "CAMPAIGN_HEADS", "table4_table", "waveform_table", "ride_table", "csv_text",
+__all__ = ["Table", "verdict_table", "verdict_heads", "campaign_table", "CAMPAIGN_HEADS", "table4_table",
+           "waveform_table", "ride_table", "csv_text",
            "read_truth", "TABLE4_HEADS", "METHODS_HEADS", "unexplained_flag"]
 
 

@@ -12,7 +12,8 @@ import html
 from .files import NOT_RECOMMENDED, POINT_CONTACT
 from .tables import CAMPAIGN_HEADS, verdict_heads
 
-__all__ = ["recording_warnings", "verdict_section", "campaign_text", "fmus_section", "files_note", "not_recommended_reason",
+__all__ = ["recording_warnings", "verdict_section", "campaign_text", "fmus_section", "files_note",
+           "not_recommended_reason",
            "agreement_text"]
 
 
