@@ -10,7 +10,7 @@ value per tire with an interval that holds that scatter.
 **Estimator** (:func:`pool_runs`): the random-effects mean of the runs, each run i an estimate y_i with a
 within-run variance v_i = s_i² and the condition's between-run variance τ² (DerSimonian & Laird 1986,
 Controlled Clinical Trials 7:177-188).  τ² by restricted maximum likelihood (REML; Viechtbauer 2005,
-J. Educ. Behav. Stat. 30:261-293, eq. 12's Fisher-scoring fixed point), the mean μ weighted by
+J. Educ. Behav. Stat. 30:261-293; Fisher scoring), the mean μ weighted by
 w_i = 1/(v_i + τ²), and its interval by Hartung-Knapp-Sidik-Jonkman (Hartung & Knapp 2001, Stat. Med.
 20:3875-3889; Sidik & Jonkman 2002, Stat. Med. 21:3153-3159):
 
@@ -89,7 +89,7 @@ def reml_tau2(y, v, *, tol: float = 1e-12, max_iter: int = 10_000) -> float:
 
     Notes
     -----
-    Fisher scoring for the restricted likelihood (Viechtbauer 2005, eq. 12), started at the
+    Fisher scoring for the restricted likelihood (Viechtbauer 2005), started at the
     DerSimonian-Laird estimate: τ² ← max(0, Σ w²((y - μ)² - v)/Σ w² + 1/Σ w), w = 1/(v + τ²),
     μ = Σ w y/Σ w.  With equal v it is max(0, s² - v), s² the runs' sample variance.
     """
