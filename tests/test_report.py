@@ -29,7 +29,7 @@ def test_demo_creates_its_folders_and_says_what_it_wrote_and_how_to_open_it(demo
                      f"{out / 'fmu'}{os.sep}", f"{out / 'params'}{os.sep}"}
     assert f"{out / 'fmu'}{os.sep} (8 recommended tire FMUs <recording>_<TIRE>.fmu; 8 point-contact ones of the " \
            f"same k, c in point_contact{os.sep}; 8 not recommended in not_recommended{os.sep})" in stdout
-    assert f"{out / 'tables'}{os.sep} (4 CSV tables)" in stdout
+    assert f"{out / 'tables'}{os.sep} (5 CSV tables)" in stdout
     assert f"{out / 'params'}{os.sep} (2 recommended parameter files <recording>.json; 8 not recommended in " \
            f"not_recommended{os.sep})" in stdout
     assert lines[-1] == f"open the report in a web browser: {(out / 'report.html').resolve().as_uri()}"
@@ -83,7 +83,7 @@ def test_demo_tables_are_downloadable_and_say_what_the_report_says(demo):
     code, out = demo
     html = (out / "report.html").read_text()
     summary = json.loads((out / "summary.json").read_text())
-    for name in ("verdict", "table4", "methods", "ride"):
+    for name in ("verdict", "campaign", "table4", "methods", "ride"):
         assert f'href="tables/{name}.csv"' in html
     rows = list(csv.DictReader((out / "tables" / "verdict.csv").open()))
     assert len(rows) == 8

@@ -29,6 +29,7 @@ from pathlib import Path
 
 from .._files import atomic_write_texts, json_text
 from ..errors import InputError
+from .campaign import NAME_KEYS
 from .files import (FIGURES_STAGING, FOLDERS, not_recommended_fmu, not_recommended_params, remove_staging,
                     write_recommended_files)
 
@@ -76,6 +77,8 @@ class RecordingReport:
     conditions: dict | None = None                   # what the run was tested at (tire_map.run_conditions)
     tires: list = field(default_factory=list)        # TireReport, file order
     diagnosis: DiagnosisReport | None = None
+    wheel_load_N: dict = field(default_factory=dict)  # static wheel load per channel, N (campaign conditions)
+    names: dict = field(default_factory=dict)         # what the sidecar names (campaign.NAME_KEYS)
 
     def recommended(self, tire: str) -> dict | None:
         """The recommended k, c of a tire: the joint diagnosis's (with its intervals), else None."""
@@ -309,7 +312,8 @@ def _read_all(paths, out_dir: Path):
             reports.append(RecordingReport(source=str(path), stem=stem, ok=False, error=exc.problem))
             continue
         reports.append(RecordingReport(source=str(path), stem=stem, ok=True, speed_kmh=rec.speed_kmh,
-                                       sample_rate_hz=rec.sample_rate_hz))
+                                       sample_rate_hz=rec.sample_rate_hz, wheel_load_N=dict(rec.wheel_load_N),
+                                       names={k: rec.extra[k] for k in NAME_KEYS if k in rec.extra}))
         # the joint diagnoses take longest: they go first
         jobs.insert(0, ("recording", str(path), stem, str(out_dir)))
         jobs += [("tire", str(path), stem, tire, str(out_dir)) for tire in rec.tires]

@@ -24,10 +24,11 @@ from pathlib import Path
 from .. import __version__
 from .._files import atomic_write_texts, json_text
 from .batch import FIGURES_STAGING, BatchResult
+from .campaign import batch_runs, campaign_conditions
 from ..diagnose.joint_evidence import interval_text
 from .files import not_recommended_params, point_contact_fmu, recommended_fmu, recommended_params
-from .tables import (METHODS_HEADS, TABLE4_HEADS, csv_text, read_truth, ride_table, table4_table, verdict_table,
-                     waveform_table)
+from .tables import (METHODS_HEADS, TABLE4_HEADS, campaign_table, csv_text, read_truth, ride_table, table4_table,
+                     verdict_table, waveform_table)
 from .verdict import agreement_text, fmus_section, not_recommended_reason, verdict_section
 
 __all__ = ["render_report", "write_report"]
@@ -123,7 +124,11 @@ _HOWTO = ('<section id="howto"><h2>How to read this</h2><dl class="howto">'
           '<dt>k, c</dt><dd>Tire vertical stiffness (N/m, shown kN/m) and damping (N·s/m, shown kN·s/m) of the '
           'point-contact spring ∥ damper at the static load.</dd>'
           '<dt>95 % interval</dt><dd>From the joint fit (sandwich covariance, with the move of the estimates when '
-          'the time step is halved); valid if the model is right.</dd>'
+          'the time step is halved); valid if the model is right. Within one run only: sensor noise and model '
+          'error, not the scatter from test to test.</dd>'
+          '<dt>pooled interval</dt><dd>Over repeated runs of one condition: the random-effects mean\'s 95 % '
+          'interval, which holds the between-run scatter; "runs disagree" when Cochran\'s Q says they scatter '
+          'beyond their fit intervals (p &lt; 0.05).</dd>'
           '<dt>NRMSE</dt><dd>RMS of measured − simulated over the RMS of the measured hub acceleration, after the '
           'zero-phase 100 Hz low-pass.</dd>'
           '<dt>noise NRMSE</dt><dd>The NRMSE the measurement noise alone would give: a fit at the noise floor '
@@ -277,7 +282,8 @@ def render_report(result: BatchResult, *, title: str = "cleatfmu report", extra:
 
 def build_tables(result: BatchResult, truths: dict) -> dict:
     """Every table of the report, by CSV name."""
-    tables = [verdict_table(result, truths), table4_table(result), waveform_table(result), ride_table(result)]
+    tables = [verdict_table(result, truths), campaign_table(result), table4_table(result), waveform_table(result),
+              ride_table(result)]
     return {t.name: t for t in tables}
 
 
@@ -350,7 +356,8 @@ def summary_document(result: BatchResult) -> dict:
             "use": "per recording, recommended_fmus (fmu/<recording>_<TIRE>.fmu) carry the recommended k and c; "
                    "'cleatfmu simulate fmu --body summary.json REC.csv' (also ssp, ride --body) takes the "
                    "recording's diagnosis from here",
-            "recordings": recordings, "failures": result.failures, "seconds": result.seconds,
+            "recordings": recordings, "campaign": campaign_conditions(batch_runs(result)),
+            "failures": result.failures, "seconds": result.seconds,
             "stage_seconds": result.timings}
 
 

@@ -14,11 +14,13 @@ import csv
 import html
 import io
 import json
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["Table", "verdict_table", "verdict_heads", "table4_table", "waveform_table", "ride_table", "csv_text",
+__all__ = ["Table", "verdict_table", "verdict_heads", "campaign_table", "CAMPAIGN_HEADS", "table4_table",
+           "waveform_table", "ride_table", "csv_text",
            "read_truth", "TABLE4_HEADS", "METHODS_HEADS", "unexplained_flag"]
 
 
@@ -142,6 +144,65 @@ def verdict_heads(table: Table) -> list:
     if "k_truth_N_m" in table.columns:
         heads += ['K rig truth', 'C rig truth']
     return heads + ['NRMSE', 'noise NRMSE', 'verdict', 'recommended FMU']
+
+
+def _shown(x: float, step: float, scale: float) -> str:
+    """`x` (already rounded to `step`) times `scale`, with the decimals of `step`."""
+    return f"{x * scale:.{max(0, -round(math.log10(step * scale)))}f}"
+
+
+def _scatter(p: dict, scale: float) -> str:
+    """The between-run SD with two significant digits and as a share of the value ('–' for one run)."""
+    sd = p["between_run_sd"]
+    return "–" if sd is None else f"{sd * scale:.2g} ({100 * sd / abs(p['value']):.2g} %)"
+
+
+def campaign_table(result) -> Table:
+    """One row per tire and condition (:mod:`~identification.report.campaign`): the pooled k and c of its
+    runs rounded to what their interval supports, the between-run scatter, where the interval comes from
+    and whether the runs disagree beyond their fit intervals (Cochran's Q)."""
+    from .campaign import batch_runs, campaign_conditions
+
+    table = Table("campaign", ["tire", "vehicle", "tire_name", "speed_km_h", "speed_km_h_min", "speed_km_h_max",
+                               "wheel_load_N", "runs", "recordings", "k_N_m", "k_ci_low", "k_ci_high",
+                               "k_between_run_sd_N_m", "k_q_p", "k_i2", "c_Ns_m", "c_ci_low", "c_ci_high",
+                               "c_between_run_sd_Ns_m", "c_q_p", "c_i2", "runs_disagree", "interval_source",
+                               "note"])
+    for row in campaign_conditions(batch_runs(result)):
+        k, c = row["k"], row["c"]
+        kr, cr = k["rounded"], c["rounded"]
+        table.rows.append([row["tire"], row["names"].get("vehicle"), row["names"].get("tire"),
+                           *(round(v * 3.6, 9) for v in (row["speed_m_s"], *row["speed_m_s_range"])),
+                           row["wheel_load_N"],
+                           row["runs"], " ".join(row["recordings"]), kr["value"], *kr["ci"], k["between_run_sd"],
+                           k["q_p"], k["i2"], cr["value"], *cr["ci"], c["between_run_sd"], c["q_p"], c["i2"],
+                           row["runs_disagree"], row["interval_source"], row["note"]])
+        if row["runs"] == 1:
+            source = '<span class="warn">one run: no repeatability measured</span> (its fit interval only)'
+        else:
+            agree = [(f'<span class="warn">{n}: runs disagree beyond their fit intervals' if p["runs_disagree"]
+                      else f'<span class="ok">{n}: runs agree within their fit intervals')
+                     + f' (Q p {"< 0.0001" if p["q_p"] < 1e-4 else "= " + format(p["q_p"], ".2g")}, '
+                     f'I² {100 * p["i2"]:.0f} %)</span>' for n, p in (("K", k), ("C", c))]
+            source = (f'between-run scatter of {row["runs"]} runs (random-effects mean, HKSJ)<br>'
+                      + "<br>".join(agree))
+        names = " ".join(_e(v) for v in row["names"].values())
+        speeds = row["speed_m_s_range"]
+        cells = [f'<td class="l">{row["tire"]}{" " + names if names else ""}</td>',
+                 f'<td>{row["speed_m_s"] * 3.6:.3g}' + (f' ({speeds[0] * 3.6:.3g}–{speeds[1] * 3.6:.3g})'
+                                                         if speeds[1] > speeds[0] else "") + "</td>",
+                 f'<td class="l" title="{_e(" ".join(row["recordings"]))}">{row["runs"]}</td>',
+                 f'<td><b>{_shown(kr["value"], kr["step"], 1e-3)}</b></td>',
+                 f'<td>{_shown(kr["ci"][0], kr["step"], 1e-3)}–{_shown(kr["ci"][1], kr["step"], 1e-3)}</td>',
+                 f'<td>{_scatter(k, 1e-3)}</td>', f'<td><b>{_shown(cr["value"], cr["step"], 1e-3)}</b></td>',
+                 f'<td>{_shown(cr["ci"][0], cr["step"], 1e-3)}–{_shown(cr["ci"][1], cr["step"], 1e-3)}</td>',
+                 f'<td>{_scatter(c, 1e-3)}</td>', f'<td class="l">{source}</td>']
+        table.html_rows.append(f"<tr>{_labelled(cells, CAMPAIGN_HEADS)}</tr>")
+    return table
+
+
+CAMPAIGN_HEADS = ['tire', 'km/h', 'runs', 'K / kN·m⁻¹', 'K 95 %', 'K between-run SD', 'C / kN·s·m⁻¹', 'C 95 %',
+                  'C between-run SD', 'interval from']
 
 
 def _flipped(r) -> list:

@@ -10,9 +10,10 @@ from __future__ import annotations
 import html
 
 from .files import NOT_RECOMMENDED, POINT_CONTACT
-from .tables import verdict_heads
+from .tables import CAMPAIGN_HEADS, verdict_heads
 
-__all__ = ["recording_warnings", "verdict_section", "fmus_section", "files_note", "not_recommended_reason",
+__all__ = ["recording_warnings", "verdict_section", "campaign_text", "fmus_section", "files_note",
+           "not_recommended_reason",
            "agreement_text"]
 
 
@@ -44,6 +45,31 @@ def files_note() -> str:
             'REC.csv</code>.</p>')
 
 
+def campaign_text(table) -> str:
+    """The paragraph above the one-row-per-condition table: the grouping rule, where its intervals come from,
+    and which conditions' runs disagree beyond their fit intervals."""
+    from .campaign import LOAD_RTOL, SPEED_TOLERANCE_KMH
+
+    col = {name: i for i, name in enumerate(table.columns)}
+    repeated = [row for row in table.rows if row[col["runs"]] > 1]
+    apart = [f'{row[col["tire"]]} at {row[col["speed_km_h"]]:.3g} km/h' for row in repeated
+             if row[col["runs_disagree"]]]
+    text = (f'<p><b>One answer per tire and condition</b> (same position, speed within {SPEED_TOLERANCE_KMH:g} '
+            f'km/h, wheel load within {100 * LOAD_RTOL:g} %, the same vehicle and tire named in the sidecar). ')
+    if repeated:
+        text += ('Repeated runs are pooled into a random-effects mean: its 95 % interval comes from the '
+                 '<b>between-run scatter</b> (REML, Hartung-Knapp-Sidik-Jonkman, t on runs − 1 degrees of '
+                 'freedom), and the values are rounded to the digits it supports. ')
+    if len(repeated) < len(table.rows):
+        text += ('A condition of one run keeps its own fit interval: <b>within-run only</b> (sensor noise and '
+                 'model error inside that run), <span class="warn">one run: no repeatability measured</span>. ')
+    if apart:
+        text += (f'<span class="warn">The runs of {len(apart)} condition(s) ({_e(", ".join(apart))}) disagree '
+                 'beyond their fit intervals (Cochran\'s Q, p < 0.05): test-to-test scatter the single-run '
+                 'intervals leave out; take the pooled values.</span>')
+    return text + "</p>" + table.html(head=CAMPAIGN_HEADS, cls="verdict")
+
+
 def verdict_section(result, tables: dict) -> str:
     """``<section id="recommended">``: the status, each recording's effects and warnings, the table."""
     table = tables["verdict"]
@@ -51,6 +77,8 @@ def verdict_section(result, tables: dict) -> str:
     truth = "k_truth_N_m" in table.columns
     warned = {r.stem: recording_warnings(r) for r in result.recordings}
     n_warn = sum(len(w) for w in warned.values())
+    campaign = tables.get("campaign")
+    apart = sum(1 for row in campaign.rows if row[campaign.columns.index("runs_disagree")]) if campaign else 0
     if conditional:
         status = ('<span class="bad">Some tire keeps a residual above its noise floor: its intervals hold only if '
                   'the model is right.</span>')
@@ -58,6 +86,10 @@ def verdict_section(result, tables: dict) -> str:
         status = (f'<span class="warn">Every tire diagnosed is fitted to within its noise floor, but the run warned '
                   f'of {n_warn} thing(s), listed under each recording below: read them before using these '
                   f'values.</span>')
+    elif apart:
+        status = (f'<span class="warn">Every tire diagnosed is fitted to within its noise floor, but the repeated '
+                  f'runs of {apart} condition(s) disagree beyond their fit intervals: take the pooled values and '
+                  f'intervals below.</span>')
     else:
         status = '<span class="ok">Every tire is fitted to within its noise floor, with no warning.</span>'
     items = []
@@ -73,6 +105,9 @@ def verdict_section(result, tables: dict) -> str:
             'effects the diagnosis named; these k and c are the ones in the recommended FMUs. ' + status
             + (' Rig truth (in italics) from the recording\'s truth file, shown for comparison only.' if truth else '')
             + f'</p><ul class="note">{"".join(items)}</ul>'
+            + (campaign_text(campaign) if campaign else "")
+            + '<p class="note">Per recording: each run\'s own joint fit; its intervals are <b>within-run only</b> '
+              '(sensor noise and model error inside that run, not test-to-test scatter).</p>'
             + table.html(head=verdict_heads(table), cls="verdict") + files_note()
             + '<p class="downloads note">Download: <a href="summary.json">summary.json</a> · '
             + " · ".join(f'<a href="tables/{name}.csv">{name}.csv</a>' for name in tables) + '</p></section>')
