@@ -15,7 +15,7 @@ from .errors import InputError
 __all__ = ["atomic_write_texts", "atomic_write_bytes", "publish_files", "json_text", "finite_or_none",
            "read_input_bytes", "read_input_text", "read_json_file", "parse_json", "parse_number",
            "INPUT_LIMIT_BYTES",
-           "OutputFolders", "check_folder", "make_folders", "missing_folders", "publish_path"]
+           "OutputFolders", "check_folder", "make_folders", "missing_folders", "publish_path", "on_outcome"]
 
 #: Largest input document (JSON, CSV table, property file) read whole, bytes.
 INPUT_LIMIT_BYTES = 256 << 20
@@ -187,11 +187,14 @@ class OutputFolders:
     When it succeeds inside an enclosing block, that block takes them over; at the outermost block the
     older files' copies are dropped.  A command is such a block up to the moment its output has reached
     stdout: a result that cannot be printed (a full disk behind ``>``) leaves the files as they were.
+    Any other change made inside the block registers its own undo and keep with :func:`on_outcome` (a whole
+    folder swapped in, :class:`identification._folders.FolderSet`); those are undone first.
     """
 
     def __init__(self):
         self.created: list[Path] = []
         self.published: list[tuple[Path, Path | None]] = []      # (file, the older file's copy or None)
+        self.outcomes: list[tuple] = []                          # (undo, keep) callables
 
     def __enter__(self) -> "OutputFolders":
         _blocks().append(self)
@@ -205,12 +208,16 @@ class OutputFolders:
         elif blocks:
             blocks[-1].created.extend(self.created)
             blocks[-1].published.extend(self.published)
-            self.created, self.published = [], []
+            blocks[-1].outcomes.extend(self.outcomes)
+            self.created, self.published, self.outcomes = [], [], []
         else:
             self.keep()
 
     def keep(self) -> None:
-        """Keep the published files: drop the older files' copies."""
+        """Keep the published files: drop the older files' copies (and run each registered keep)."""
+        outcomes, self.outcomes = self.outcomes, []
+        for _, keep in outcomes:
+            keep()
         for _, backup in self.published:
             if backup is not None:
                 _unlink_quietly(backup)
@@ -218,7 +225,11 @@ class OutputFolders:
 
     def remove(self) -> None:
         """Undo the block's output: older files back, new files removed, then the recorded folders that are
-        empty (the deepest first); forget all of them."""
+        empty (the deepest first); forget all of them.  The changes registered with :func:`on_outcome` are
+        undone first, the latest first."""
+        outcomes, self.outcomes = self.outcomes, []
+        for undo, _ in reversed(outcomes):
+            undo()
         for path, backup in reversed(self.published):
             try:
                 if backup is not None:
@@ -234,6 +245,22 @@ class OutputFolders:
             except OSError:
                 pass
         self.created = []
+
+
+def on_outcome(undo, keep) -> None:
+    """Register a change that the enclosing :class:`OutputFolders` block undoes (``undo()``) if it fails,
+    or confirms (``keep()``) when it succeeds; outside any block the change is kept at once.
+
+    Parameters
+    ----------
+    undo, keep : callable
+        Called without arguments, exactly one of them, once.
+    """
+    blocks = _blocks()
+    if blocks:
+        blocks[-1].outcomes.append((undo, keep))
+    else:
+        keep()
 
 
 def _unlink_quietly(path) -> None:

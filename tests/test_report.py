@@ -239,8 +239,9 @@ def test_report_needs_recordings(cli, tmp_path):
 
 @pytest.mark.parametrize("case", ["unreadable", "through a file", "interrupted"])
 def test_a_failed_run_into_new_folders_leaves_none_behind(cli, tmp_path, monkeypatch, case):
-    """report: nothing readable; demo: a path through a file, or interrupted once its folders exist.
-    One line on stderr, exit 2 (130 interrupted), and no folder left behind."""
+    """report: nothing readable; demo: a path through a file, or interrupted once its folders exist (in the
+    new set beside the output folder).  One line on stderr, exit 2 (130 interrupted), and no folder left
+    behind."""
     import identification.report.batch as batch
 
     (tmp_path / "bad.csv").write_text("x,FL\n0,1\n")
@@ -261,7 +262,8 @@ def test_a_failed_run_into_new_folders_leaves_none_behind(cli, tmp_path, monkeyp
     else:
         res = cli("demo", "--out", tmp_path / "a" / "b" / "c", "--workers", "1")
         assert res.code == 130 and res.err == "cleatfmu: interrupted\n", res.err
-        assert {"a/b/c/fmu", "a/b/c/params", "a/b/c/.figures-staging"} <= {str(p) for p in made}
+        new = f"a/b/c.cleatfmu-new-{os.getpid()}"          # the new set, written beside the folder
+        assert {f"{new}/fmu", f"{new}/params", f"{new}/.figures-staging"} <= {str(p) for p in made}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "file"]
 
 

@@ -2,9 +2,16 @@
 
 Both say at once what they are about to do (stdout), show a progress bar from
 the first second (stderr, on a terminal), and end by listing what they wrote
-and how to open the report.  The output folder and its missing parents are
-created; a run that fails before writing anything removes them again
-(:class:`identification.cli.util.OutputFolders`).
+and how to open the report.
+
+The output folder is written as one set (:class:`identification._folders.FolderSet`): the run writes
+``OUT.cleatfmu-new-<pid>`` beside ``OUT`` (its temporary files too) and swaps it in whole at the end, so
+that ``OUT`` holds the previous report or the new one, never a mix, and nothing of an earlier run stays.
+A run that fails or is interrupted (an error, Ctrl-C, SIGTERM, a full disk: one line on stderr) leaves
+``OUT`` as it was and removes its new set and the missing parents it created; one killed by SIGKILL
+leaves its new set, removed by the next run on ``OUT``.  A second run on a folder while one writes it is
+refused in one line naming the running one's pid (the lock ``OUT.cleatfmu-lock``, beside it).  An
+existing folder is replaced only if it holds a report, or nothing a report does not write.
 """
 
 from __future__ import annotations
@@ -72,19 +79,25 @@ def _run(paths, out, *, title: str, command: str, workers: int | None, extra: di
     if out.exists() and not out.is_dir():
         raise InputError(out, "exists and is not a directory")
     check_folder(out)                   # a part of the path is a file: refused before anything is done
-    where = f"the Dask cluster at {scheduler}" if scheduler else \
-        f"up to {workers or os.cpu_count() or 1} local process(es)"
-    print(f"cleatfmu {command}: {len(paths)} recording(s) into {out}{os.sep} on {where}", flush=True)
-    from ..report.batch import run_batch
-    from .util import announce_compilation
-    from ..report.html import write_report
+    from .._folders import FolderSet, raise_write_error
+    from ..report.files import replace_refusal
 
-    announce_compilation()
+    # the new set is written beside `out` and swapped in whole at the end (a failed run leaves `out` as it was)
+    with FolderSet(out, replaceable=replace_refusal) as new:
+        where = f"the Dask cluster at {scheduler}" if scheduler else \
+            f"up to {workers or os.cpu_count() or 1} local process(es)"
+        print(f"cleatfmu {command}: {len(paths)} recording(s) into {out}{os.sep} on {where}", flush=True)
+        from ..report.batch import run_batch
+        from .util import announce_compilation
+        from ..report.html import write_report
 
-    # run_batch creates `out` and its missing parents inside the command's OutputFolders block
-    result = run_batch(paths, out, workers=workers, scheduler=scheduler)
-    t_report = time.perf_counter()
-    report = write_report(result, title=title, extra=extra)
+        announce_compilation()
+        result = run_batch(paths, new, workers=workers, scheduler=scheduler)
+        raise_write_error(result.failures)      # a job that could not write (a full disk): the run failed
+        t_report = time.perf_counter()
+        write_report(result, title=title, extra=extra)
+    result.out_dir = out
+    report = out / "report.html"
     n_tires = sum(len(r.tires) for r in result.recordings)
     print(f"{report}: {len(result.recordings)} recording(s), {n_tires} tire(s) in {time.perf_counter() - t0:.1f} s "
           f"(report {time.perf_counter() - t_report:.1f} s)")
@@ -113,6 +126,13 @@ def run_report(args) -> int:
                 workers=args.workers, scheduler=args.scheduler)
 
 
+#: The output contract, as the commands' help says it.
+_ONE_SET = ("OUT is written as one set: the run writes OUT.cleatfmu-new-<pid> beside it and swaps it in at the end "
+            "(nothing of an earlier report stays); a failed or interrupted run leaves OUT as it was; a second run "
+            "on OUT while one writes it is refused (the lock OUT.cleatfmu-lock); an existing folder holding files "
+            "a report does not write is not replaced.")
+
+
 def add_parser(subparsers) -> None:
     """Register ``cleatfmu demo`` and ``cleatfmu report``."""
     workers = min(os.cpu_count() or 1, 8)
@@ -121,7 +141,7 @@ def add_parser(subparsers) -> None:
         description="Identify every tire of the embedded cleat-test day (paper's and waveform method), export the "
                     "tire FMUs, co-simulate them, diagnose, export the extended FMUs, co-simulate again, and write "
                     "DIR/report.html (self-contained) with DIR/fmu/, DIR/params/ and DIR/summary.json. DIR and "
-                    "its missing parents are created.")
+                    "its missing parents are created. " + _ONE_SET.replace("OUT", "DIR"))
     p.add_argument("--out", default="cleatfmu-demo", metavar="DIR", help="output folder (default: %(default)s)")
     p.add_argument("--workers", type=int, default=workers, help="processes (default: the machine's cores)")
     p.set_defaults(func=run_demo)
@@ -129,7 +149,7 @@ def add_parser(subparsers) -> None:
         "report", help="the whole chain over your recordings, into one report",
         description="Process recordings (files, or folders of *.csv with their sidecars) as 'demo' does. A recording "
                     "that cannot be processed is named in the summary and on stderr, the others go on; the exit "
-                    "status is 2 if anything failed (if no recording can be read, nothing is written).")
+                    "status is 2 if anything failed (if no recording can be read, nothing is written). " + _ONE_SET)
     r.add_argument("inputs", nargs="+", metavar="DIR_OR_FILE")
     r.add_argument("-o", "--output", required=True, metavar="OUT",
                    help="output folder (created with its missing parents)")

@@ -24,7 +24,7 @@ from .._files import atomic_write_texts, json_text, publish_files
 
 __all__ = ["POINT_CONTACT", "NOT_RECOMMENDED", "FOLDERS", "recommended_fmu", "point_contact_fmu",
            "recommended_params", "not_recommended_fmu", "not_recommended_params", "write_recommended_files",
-           "file_counts", "remove_staging", "FIGURES_STAGING"]
+           "file_counts", "remove_staging", "FIGURES_STAGING", "REPORT_ENTRIES", "replace_refusal"]
 
 #: Subfolder (of ``fmu/``) of the plain spring-damper FMUs of the recommended k and c.
 POINT_CONTACT = "point_contact"
@@ -151,6 +151,41 @@ def remove_staging(out_dir) -> list[Path]:
 
 #: Staging folder of the figures while a batch runs (each result's figures go to disk as it arrives).
 FIGURES_STAGING = ".figures-staging"
+
+#: What a report folder holds at its top.
+REPORT_ENTRIES = ("report.html", "summary.json", "tables", "fmu", "params", "figures", FIGURES_STAGING)
+_SUMMARY_MARK = b'"format": "cleatfmu-report-summary/'
+
+
+def replace_refusal(folder) -> str | None:
+    """Whether an existing folder may be replaced whole by a new report (the run swaps its new set in).
+
+    Parameters
+    ----------
+    folder : path-like
+        The existing output folder.
+
+    Returns
+    -------
+    str or None
+        None when it is empty, holds a report (its ``summary.json``), or holds only what a report writes
+        (an older run's leftovers); else why not, in one line naming an entry a report does not write (it
+        would be lost).
+    """
+    folder = Path(folder)
+    try:
+        with (folder / "summary.json").open("rb") as fh:
+            if _SUMMARY_MARK in fh.read(256):
+                return None
+    except OSError:
+        pass
+    for entry in sorted(folder.iterdir()):
+        name = entry.name
+        if name in REPORT_ENTRIES or (name.startswith(".") and name.endswith((".tmp", ".part", ".previous"))):
+            continue
+        return (f"is not a report folder ({name} is not a file a report writes, and a report replaces the "
+                f"whole folder): give a new or empty folder")
+    return None
 
 
 def bias(value: float, reference: float) -> float:
