@@ -146,18 +146,13 @@ EXIT_TERMINATED = 143
 _signalled = 0
 
 
-#: Seconds a terminated command has to unwind before it is ended where it stands (its run folder removed).
-TERMINATE_GRACE_S = 3.0
-#: The run's private temporary folder (every temporary file and folder of the run is made inside it).
-_run_tmp = None
+#: Seconds a terminated command has to unwind before it is ended where it stands.
+TERMINATE_GRACE_S = 10.0
 
 
 def _force_exit() -> None:
-    """End a terminated run that did not unwind in time (a library holding a lock the unwinding needs)."""
-    import shutil
-
-    if _run_tmp is not None:
-        shutil.rmtree(_run_tmp, ignore_errors=True)
+    """End a terminated run that did not unwind in time (a library holding a lock the unwinding needs; its
+    temporary files may then stay behind)."""
     try:
         sys.stderr.write("cleatfmu: terminated\n")
         sys.stderr.flush()
@@ -288,14 +283,8 @@ def main(argv=None) -> int:
         print("cleatfmu: error: stdout: closed (the result would be lost); redirect it to a file or a pipe",
               file=sys.stderr)
         return 2
-    global _signalled, _run_tmp
-    import shutil
-    import tempfile
-
+    global _signalled
     _signalled = 0
-    saved_tmp = tempfile.tempdir
-    _run_tmp = tempfile.mkdtemp(prefix=f"cleatfmu_run_{os.getpid()}_")
-    tempfile.tempdir = _run_tmp        # the run's temporary files, in one folder removed at the end
     previous = _catch_sigterm()
     try:
         _answer_early_interrupt()
@@ -322,9 +311,6 @@ def main(argv=None) -> int:
         if _signalled == EXIT_TERMINATED:          # no retry of SIGTERM may outlive the run
             signal.setitimer(signal.ITIMER_REAL, 0)
             signal.signal(signal.SIGALRM, signal.SIG_DFL)
-        tempfile.tempdir = saved_tmp
-        shutil.rmtree(_run_tmp, ignore_errors=True)
-        _run_tmp = None
 
 
 if __name__ == "__main__":  # pragma: no cover
