@@ -160,19 +160,21 @@ def _force_exit() -> None:
         os._exit(EXIT_TERMINATED)
 
 
-_STDLIB = os.path.dirname(os.__file__)
+#: Standard-library code where an exception raised by a signal handler is ignored ("Exception ignored in")
+#: or leaves a lock held: the logging module's locks (taken around every fork), the import machinery.
+_FRAGILE = ("logging" + os.sep + "__init__.py", "<frozen importlib")
 
 
 def _in_the_standard_library(frame) -> bool:
-    """Whether `frame` runs the standard library's own code (its locks, its fork handlers), where an
-    exception raised by a signal handler is ignored or leaves a lock held."""
+    """Whether `frame` runs code in which a signal's exception must not be raised (:data:`_FRAGILE`)."""
     name = frame.f_code.co_filename if frame is not None else ""
-    return name.startswith("<frozen") or (name.startswith(_STDLIB) and "site-packages" not in name)
+    return any(part in name for part in _FRAGILE)
 
 
 def _raise_terminated(signum, frame):
-    """SIGTERM (and its retries on SIGALRM): raise :class:`Terminated` where the command is; in the standard
-    library's own code, try again 20 ms later; after :data:`TERMINATE_GRACE_S` end the run where it stands."""
+    """SIGTERM (and its retries on SIGALRM): raise :class:`Terminated` where the command is; in fragile
+    standard-library code (:data:`_FRAGILE`), try again 20 ms later; after :data:`TERMINATE_GRACE_S` end the
+    run where it stands."""
     global _signalled
     if signum == signal.SIGALRM and _signalled != EXIT_TERMINATED:
         return
