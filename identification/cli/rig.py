@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .._files import check_folder
 from ..rig import params as P
 
 __all__ = ["add_parser", "default_stem"]
@@ -63,48 +64,18 @@ def _tire_names_upper(assignments: dict[str, str]) -> dict[str, str]:
     return out
 
 
-def _missing_folders(folder) -> list[Path]:
-    """The folders to create to have `folder`, outermost first (InputError if a part of it is a file).
-
-    (The rig shares no code with the pipeline but the recording format, errors and file writing, hence
-    this small copy of :func:`identification.cli.util.make_folders`' check.)
-    """
-    from ..errors import InputError
-
-    folder = Path(folder)
-    missing = []
-    for path in (folder, *folder.parents):
-        if path.is_dir():
-            break
-        if path.exists():
-            raise InputError(path, "is not a directory")
-        missing.append(path)
-    return missing[::-1]
-
-
 def _write(rig_run, stem: Path, decimals: int):
-    """:func:`write_run` into a folder created as needed; a folder created here goes again if the write fails."""
+    """:func:`write_run` into a folder created as needed (inside the command's
+    :class:`~identification._files.OutputFolders` block: a folder created here goes again if the run fails)."""
+    from .._files import make_folders
     from ..errors import InputError
     from ..rig.generate import write_run
 
-    created = []
+    make_folders(stem.parent)
     try:
-        for folder in _missing_folders(stem.parent):
-            try:
-                folder.mkdir()
-            except FileExistsError:  # made meanwhile by another run: not ours to remove
-                continue
-            created.append(folder)
         return write_run(rig_run, stem, value_decimals=decimals)
-    except BaseException as exc:
-        for folder in reversed(created):
-            try:
-                folder.rmdir()
-            except OSError:
-                pass
-        if isinstance(exc, OSError):
-            raise InputError(stem, f"cannot write: {exc.strerror or exc}") from None
-        raise
+    except OSError as exc:
+        raise InputError(stem, f"cannot write: {exc.strerror or exc}") from None
 
 
 def _check_options(args) -> None:
@@ -132,7 +103,7 @@ def run(args) -> int:
         return 0
     into_folder = args.output is not None and Path(args.output).is_dir()
     if args.output is not None and not into_folder:
-        _missing_folders(Path(args.output).parent)
+        check_folder(Path(args.output).parent)
     from ..rig.generate import run_rig  # the solver stack loads only when the rig runs
 
     _check_options(args)
