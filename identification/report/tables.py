@@ -265,14 +265,21 @@ METHODS_HEADS = ['recording', 'tire', 'K paper', 'K waveform', 'K waveform 95 %'
 
 
 def ride_table(result) -> Table:
-    """Every recording's ride: a_w, VDV, MTVV and crest factor at the seat per parameter set."""
-    table = Table("ride", ["recording", "road_class", "speed_m_s", "set", "k_FL_N_m", "k_FR_N_m", "k_RL_N_m",
-                           "k_RR_N_m", "a_w_m_s2", "vdv_m_s175", "mtvv_m_s2", "crest_factor"])
+    """Every recording's ride per parameter set: expected a_w, VDV, MTVV over the road realisations with
+    the 95 % interval of the mean and of one ride, the PSD's a_w, and the first road's a_w."""
+    table = Table("ride", ["recording", "road_class", "realisations", "speed_m_s", "set", "k_FL_N_m", "k_FR_N_m",
+                           "k_RL_N_m", "k_RR_N_m", "a_w_mean_m_s2", "a_w_mean_lo", "a_w_mean_hi", "a_w_one_ride_lo",
+                           "a_w_one_ride_hi", "a_w_psd_m_s2", "vdv_mean_m_s175", "mtvv_mean_m_s2",
+                           "vector_sum_health_mean_m_s2", "a_w_first_road_m_s2", "tire_law", "static_source"])
     for r in result.recordings:
         d = r.diagnosis.ride if r.diagnosis is not None else None
         if d is None:
             continue
         for name, s in d["sets"].items():
-            table.rows.append([r.stem, d["road"]["class"], d["speed_m_s"], name, *s["k"].values(), s["a_w"],
-                               s["vdv"], s["mtvv"], s["crest_factor"]])
+            e = s["expected"]
+            table.rows.append([r.stem, d["road"]["class"], d["road"]["realisations"], d["speed_m_s"], name,
+                               *s["k"].values(), e["a_w"]["mean"], *e["a_w"]["mean_interval"],
+                               *e["a_w"]["single_ride_interval"], e["psd"]["a_w"], e["vdv"]["mean"],
+                               e["mtvv"]["mean"], e["vector_sum_health"]["mean"], s["a_w"], d["tires"],
+                               d["static"]["file"] if name == "static" and d.get("static") else ""])
     return table
