@@ -175,7 +175,10 @@ def _diagnosis_section(r) -> str:
         out.append(f'<p>Effects the four-corner model misses: <b>{_e(effects)}</b>. Front axle {body["front_axle"]}'
                    f'{"; " + indices if indices else ""}. Speed {speed["sidecar"] * 3.6:.2f} km/h (sidecar){delay}. '
                    + agreement_text(d["agreement"])
-                   + f'; diagnosis {d["seconds"]:.1f} s. Intervals: {_e(d["intervals"])}.</p>')
+                   + f'; diagnosis {d["seconds"]:.1f} s'
+                   + (f' (and {d["compile_seconds"]:.1f} s compiling the model\'s code, once per install)'
+                      if d.get("compile_seconds") else "")
+                   + f'. Intervals: {_e(d["intervals"])}.</p>')
         for name in d["effects"]:
             out.append(f'<div class="effect"><b>{_e(name)}</b>: {_e(d["evidence"].get(name, ""))}</div>')
         if "diagnosis" in rep.figures:
