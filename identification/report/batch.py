@@ -395,14 +395,8 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
         for stage, sec in rep.timings.items():
             totals[stage] = totals.get(stage, 0.0) + sec
     result = BatchResult(recordings=reports, out_dir=out_dir, seconds=time.perf_counter() - t0, timings=totals)
-    from .campaign import batch_runs, campaign_conditions
-    from .pooled import write_pooled_files
-    conditions = campaign_conditions(batch_runs(result))
+    from .pooled import write_campaign
     with _timed(totals, "export"):
-        try:
-            result.campaign = write_pooled_files(conditions, out_dir)
-        except InputError as exc:
-            result.errors.append(f"campaign: pooled files: {exc.problem}")
-            result.campaign = [dict(row, files=None) for row in conditions]
+        write_campaign(result)
     result.seconds = time.perf_counter() - t0
     return result

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from .._files import atomic_write_texts, json_text, make_folders, publish_files
 
-__all__ = ["CAMPAIGN", "pooled_name", "write_pooled_files"]
+__all__ = ["CAMPAIGN", "pooled_name", "write_pooled_files", "write_campaign"]
 
 #: Subfolder (of ``fmu/`` and ``params/``) of the pooled files.
 CAMPAIGN = "campaign"
@@ -101,3 +101,17 @@ def write_pooled_files(conditions: list, out_dir) -> list:
     for name, row in names.items():
         row["files"] = {"params": f"params/{CAMPAIGN}/{name}.json", "fmu": f"fmu/{CAMPAIGN}/{name}.fmu"}
     return rows
+
+
+def write_campaign(result) -> None:
+    """A batch's campaign conditions with their pooled files into ``result.campaign`` (written into
+    ``result.out_dir``); a condition whose files cannot be built is named in ``result.errors``."""
+    from ..errors import InputError
+    from .campaign import batch_runs, campaign_conditions
+
+    conditions = campaign_conditions(batch_runs(result))
+    try:
+        result.campaign = write_pooled_files(conditions, result.out_dir)
+    except InputError as exc:
+        result.errors.append(f"campaign: pooled files: {exc.problem}")
+        result.campaign = [dict(row, files=None) for row in conditions]
