@@ -46,6 +46,9 @@ def seat_acceleration(model: TractorModel, trajectory, *, seat_x_m: float, seat_
 
 #: What the seat's ratings are: the seat is a point of the body.
 FLOOR_VALUES = "floor values: the seat is a point of the body, no seat suspension"
+#: What they are with a suspended seat (``ride(..., seat=SeatModel)``).
+SEAT_VALUES = ("z on the suspended seat (the occupant), its floor values alongside; x and y are floor values "
+               "(the seat's suspension is vertical only)")
 
 #: Default seat position behind the front axle, as a fraction of the wheelbase (a tractor's seat sits
 #: ahead of, and close to, the rear axle).
@@ -58,7 +61,11 @@ ROAD_SPACING_M = 0.01
 
 @dataclass(frozen=True, eq=False)
 class RideRun:
-    """One parameter set's ride: the tires, the seat's acceleration and its ISO 2631-1 rating."""
+    """One parameter set's ride: the tires, the seat's acceleration and its ISO 2631-1 rating.
+
+    With a suspended seat, `seat_m_s2`, `comfort` and the z axis of `axes` are the occupant's, and
+    `suspension` (:class:`~identification.comfort.seat.SeatRide`) holds the floor's rating, the SEAT factor
+    and the end stops' contacts."""
 
     name: str
     k: dict                    # tire -> N/m
@@ -68,6 +75,7 @@ class RideRun:
     comfort: object            # ComfortResult (Wk)
     contact: dict | None = None  # the law rated ("linear" or "lift-off"), tension and lost contact per tire
     axes: object = None        # ThreeAxisResult: the seat's x, y, z
+    suspension: object = None  # SeatRide: the suspended seat on the floor (None: the seat is the floor)
 
     def to_json(self) -> dict:
         doc = {"k": self.k, "c": self.c, **self.comfort.to_json()}
@@ -75,12 +83,14 @@ class RideRun:
             doc["contact"] = self.contact
         if self.axes is not None:
             doc["three_axes"] = self.axes.to_json()
+        if self.suspension is not None:
+            doc["suspended_seat"] = self.suspension.to_json()
         return doc
 
 
 def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, seat_x_m: float | None = None,
          seat_y: float = 0.0, step_s: float = 1e-3, exposure_h: float | None = None, tires: str = "linear",
-         seat_height_m: float | None = None) -> dict:
+         seat_height_m: float | None = None, seat=None) -> dict:
     """Drive the tractor over `road` once per tire parameter set; the seat's Wk rating of each.
 
     Parameters
@@ -108,6 +118,9 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
     seat_height_m : float, optional
         Seat height above the axles, m (default :data:`identification.comfort.seat_axes.DEFAULT_SEAT_HEIGHT_M`),
         for the seat's fore-aft and lateral acceleration (:mod:`identification.comfort.seat_axes`).
+    seat : SeatModel, optional
+        A suspended seat (:mod:`identification.comfort.seat`) on the floor at the seat's point, stepped
+        from the start of the ride: the z axis is rated on it (x and y stay floor values).
 
     Returns
     -------
@@ -119,6 +132,7 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
     from .seat_axes import DEFAULT_SEAT_HEIGHT_M, axis_rows, three_axis
     from ..model.kernels import run_model
     from .iso2631 import comfort
+    from .seat import seat_ride
 
     seat_x = SEAT_X_FRACTION * body.wheelbase_m if seat_x_m is None else float(seat_x_m)
     settle_s = (RAMP_M + body.wheelbase_m) / speed_m_s
@@ -149,12 +163,16 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
             contact["law"] = "lift-off"
             contact["lost_contact"] = {t: episodes(traj.force_n[j, keep] <= 0.0, step_s)
                                        for j, t in enumerate(body.tires)}
-        qdd = np.linalg.lstsq(J, np.asarray(traj.hub_accel_m_s2), rcond=None)[0][:, keep]
-        seat = rows["z"] @ qdd
+        qdd = np.linalg.lstsq(J, np.asarray(traj.hub_accel_m_s2), rcond=None)[0]
+        suspension = None if seat is None else seat_ride(seat, rows["z"] @ qdd, 1.0 / step_s, keep=keep,
+                                                         exposure_h=exposure_h)
+        qdd = qdd[:, keep]
+        z = rows["z"] @ qdd if seat is None else suspension.response.seat_m_s2
+        rating = comfort(z, 1.0 / step_s, "Wk", exposure_h=exposure_h) if seat is None else suspension.seat
         out[name] = RideRun(name, {t: float(k[t]) for t in body.tires}, {t: float(c[t]) for t in body.tires},
-                            traj.time_s[keep], seat, comfort(seat, 1.0 / step_s, "Wk", exposure_h=exposure_h),
-                            contact, three_axis(rows["x"] @ qdd, rows["y"] @ qdd, seat, 1.0 / step_s,
-                                                exposure_h=exposure_h))
+                            traj.time_s[keep], z, rating, contact,
+                            three_axis(rows["x"] @ qdd, rows["y"] @ qdd, z, 1.0 / step_s, exposure_h=exposure_h),
+                            suspension)
     return out
 
 
@@ -173,7 +191,7 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
                     duration_s: float = 60.0, seat_x_m: float | None = None, seat_y: float = 0.0,
                     exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1, ssp_dir=None,
                     realisations: int = 1, tires: str = "linear", seat_height_m: float | None = None,
-                    body_doc=None) -> tuple:
+                    body_doc=None, seat=None) -> tuple:
     """The recording's tractor on ISO 8608 roads with each parameter set: (runs, JSON document).
 
     Combines :func:`parameter_sets`, :func:`identification.comfort.road.road_profile` (grid ROAD_SPACING_M)
@@ -183,7 +201,10 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
     `seed`'s road and (``expected``) every rating's expected value with its intervals and the a_w from the
     road PSD (SI units), as ``cleatfmu ride --json`` prints it.  The returned runs are those on `seed`'s
     road.  With `ssp_dir` every set's ride on that road is also written there as an SSP 1.0 system of FMUs
-    (:func:`identification.comfort.ride_ssp.write_ride_ssps`; ``doc["ssp"]``).
+    (:func:`identification.comfort.ride_ssp.write_ride_ssps`; ``doc["ssp"]``).  With `seat` (a
+    :class:`~identification.comfort.seat.SeatModel`) the occupant rides a suspended seat (:func:`ride`): the
+    z ratings are the seat's, each set's ``suspended_seat`` holds the floor's, the SEAT factor and the end
+    stops, with their expected values; the SSP systems hold the floor only.
     """
     from .contact import contact_summary
     from .expected import expected_set, rating_values, realisation_seeds
@@ -199,7 +220,7 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
         road_s = road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M, s)
         every.append(ride(body, sets, road=road_s, speed_m_s=speed, duration_s=duration_s, seat_x_m=seat_x_m,
                           seat_y=seat_y, exposure_h=exposure_h, tires=tires,
-                          seat_height_m=seat_height_m))
+                          seat_height_m=seat_height_m, seat=seat))
         if len(every) == 1:
             road = road_s                       # seed's own road: the runs returned, the SSP archives
     runs = every[0]
@@ -211,14 +232,17 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
                     "length_m": float(road.x_m[-1]), "track_width_m": road.track_width_m,
                     "coherence_decay": road.coherence_decay},
            "speed_m_s": speed, "duration_s": float(duration_s), "tires": tires,
-           "seat": {"x_m": seat_x, "y": float(seat_y), "height_m": height, "values": FLOOR_VALUES},
+           "seat": {"x_m": seat_x, "y": float(seat_y), "height_m": height,
+                    "values": FLOOR_VALUES if seat is None else SEAT_VALUES,
+                    **({} if seat is None else {"suspension": seat.to_json()})},
            "body": {"kind": body.kind, "pitch_index": body.pitch_index, "roll_index": body.roll_index,
                     **({"pivot_index": body.pivot_index} if body.pivot else {}), "source": how},
            "sets": {name: r.to_json() for name, r in runs.items()}}
     for name, (k, c) in sets.items():
-        per_ride = [{**rating_values(e[name].comfort), **e[name].axes.values()} for e in every]
+        per_ride = [{**rating_values(e[name].comfort), **e[name].axes.values(),
+                     **(e[name].suspension.values() if seat is not None else {})} for e in every]
         doc["sets"][name]["expected"] = expected_set(per_ride, body=body, k=k, c=c, row=rows["z"], road=road,
-                                                     speed_m_s=speed, seeds=seeds, rows=rows)
+                                                     speed_m_s=speed, seeds=seeds, rows=rows, seat=seat)
         doc["sets"][name]["expected"]["contact"] = contact_summary([e[name].contact for e in every], body.tires)
         if name.startswith("map="):      # the map's values at the speed, with their bands and extrapolation
             doc["sets"][name]["map"] = map_set(name[4:], speed, body.tires)[2]
