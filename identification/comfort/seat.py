@@ -233,10 +233,12 @@ def seat_response(seat: SeatModel, floor_m_s2, sample_rate_hz: float, *, keep=No
 
 @dataclass(frozen=True, eq=False)
 class SeatRide:
-    """A floor record rated on the seat: the :class:`SeatResponse`, the ISO 2631-1 Wk ratings of the
-    occupant (`seat`) and of the floor (`floor`), and the SEAT factor a_w(seat) / a_w(floor)."""
+    """A floor record rated on the seat: the :class:`SeatResponse`, the floor's acceleration rated
+    (`floor_m_s2`, m/s²), the ISO 2631-1 Wk ratings of the occupant (`seat`) and of the floor (`floor`), and the
+    SEAT factor a_w(seat) / a_w(floor)."""
 
     response: SeatResponse
+    floor_m_s2: np.ndarray
     seat: object                 # ComfortResult
     floor: object                # ComfortResult
     seat_factor: float
@@ -278,7 +280,7 @@ def seat_ride(seat: SeatModel, floor_m_s2, sample_rate_hz: float, *, keep=None,
     on_seat = comfort(response.seat_m_s2, sample_rate_hz, "Wk", exposure_h=exposure_h)
     on_floor = comfort(floor, sample_rate_hz, "Wk", exposure_h=exposure_h)
     ratio = on_seat.a_w / on_floor.a_w if on_floor.a_w > 0 else math.nan
-    return SeatRide(response, on_seat, on_floor, ratio)
+    return SeatRide(response, floor, on_seat, on_floor, ratio)
 
 
 # ----------------------------------------------------------------------------- ISO 5007 input classes
@@ -359,7 +361,8 @@ def class_seat_factor(seat: SeatModel, input_class, *, duration_s: float = CLASS
                       sample_rate_hz: float = CLASS_SAMPLE_RATE_HZ, seed: int = 1) -> dict:
     """The seat's SEAT factor on an ISO 5007 input class, in the time and in the frequency domain.
 
-    The seat is stepped on :func:`class_record` (`duration_s` rated after 5 s of settling) and rated with
+    The seat is stepped on :func:`class_record` (`duration_s` rated after 5 s of settling on the record's
+    periodic continuation) and rated with
     :func:`seat_ride`; :func:`spectral_seat_factor` gives the linear seat's value.
 
     Returns
@@ -372,8 +375,9 @@ def class_seat_factor(seat: SeatModel, input_class, *, duration_s: float = CLASS
     cls = _input_class(input_class)
     fs = positive("sample_rate_hz", sample_rate_hz)
     skip = int(round(_SETTLE_S * fs))
-    floor = class_record(cls, duration_s=positive("duration_s", duration_s) + _SETTLE_S, sample_rate_hz=fs, seed=seed)
-    rated = seat_ride(seat, floor, fs, keep=slice(skip, None))
+    floor = class_record(cls, duration_s=positive("duration_s", duration_s), sample_rate_hz=fs, seed=seed)
+    # the record is periodic: its last 5 s lead in, and the rated part is one whole period (Parseval's mean square)
+    rated = seat_ride(seat, np.concatenate((floor[-skip:], floor)), fs, keep=slice(skip, None))
     f = np.linspace(0.1, 40.0, 20000)
     return {"class": cls.name, "tractor_mass": cls.tractor_mass,
             "input_rms": float(math.sqrt(np.trapezoid(class_psd(f, cls), f))),
