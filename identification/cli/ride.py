@@ -248,7 +248,7 @@ def format_seat(doc: dict, source: str = "") -> str:
     seat = doc["seat"]["suspension"]
     lines = [f"suspended seat{' ' + source if source else ''}: {seat['mass_kg']:g} kg, natural frequency "
              f"{seat['natural_frequency_hz']:.2f} Hz, damping ratio {seat['damping_ratio']:.2f}, travel "
-             f"±{seat['travel_m'] * 1e3:g} mm (expected values; z a_w in m/s2)"]
+             f"+-{seat['travel_m'] * 1e3:g} mm (expected values; z a_w in m/s2)"]
     for name, entry in doc["sets"].items():
         e = entry["expected"]
         lines.append(f"{name}: seat {e['a_w']['mean']:.3f}, floor {e['floor_a_w']['mean']:.3f}, SEAT "
