@@ -3,7 +3,8 @@
 The body (rigid or pivoting front axle, dynamic indices) and the sets come
 from a whole-tractor recording (:func:`identification.comfort.ride.parameter_sets`);
 the ride from :func:`identification.comfort.ride.ride`; the rating is
-ISO 2631-1's Wk (vertical) at the seat.
+ISO 2631-1's Wk (vertical) at the seat: on the floor, or with ``--seat PARAMS.json`` on a suspended seat
+(:mod:`identification.comfort.seat`).
 """
 
 from __future__ import annotations

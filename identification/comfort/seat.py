@@ -91,7 +91,7 @@ class SeatModel:
 
     def __post_init__(self):
         for f in fields(self):
-            _check_value(f.name, getattr(self, f.name), f.name)
+            _check_value(f.name, getattr(self, f.name), "seat")
 
     @property
     def natural_frequency_hz(self) -> float:
@@ -343,6 +343,8 @@ def class_record(input_class, *, duration_s: float = CLASS_DURATION_S,
     amp[0] = 0.0
     if n % 2 == 0:
         amp[-1] = 0.0
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError("--seed", f"must be an integer >= 0, got {seed!r}")
     phase = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi, f.size)
     return np.fft.irfft(0.5 * n * amp * np.exp(1j * phase), n)
 
