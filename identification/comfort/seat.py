@@ -37,13 +37,14 @@ RMS targets of the same toolbox's test signals (``hvtestsignal.m``): the two sta
 this toolbox's reading of the standard, not checked against its text; the tolerances of the standard
 (and of its test rigs) are not modelled.
 
-**Seat defaults** (:data:`DEFAULT_SEAT`), a passive mechanical suspension seat of a mid-size tractor:
+**Seat defaults** (:data:`DEFAULT_SEAT`), a passive mechanical suspension seat of a mid-size tractor.
+They are engineering choices within the ranges commonly quoted for such seats, not a measured seat:
 suspended mass 90 kg (about three quarters of a 95 kg operator rests on the seat pan, the rest on the
 floor through the legs, plus about 20 kg of the seat's suspended upper part); natural frequency 1.6 Hz
-and damping ratio 0.3 (k 9.1 kN/m, c 540 N s/m: passive tractor seats are tuned to 1.5-2 Hz with a
-damping ratio of 0.2-0.4, ISO 5007's inputs peak at 2.2-3.2 Hz, above √2 times that frequency);
-±50 mm free travel (a 100 mm stroke, as mechanical seats have 80-100 mm); rubber end stops of
-200 kN/m (an assumption: 22 times the spring, a 7.5 Hz bounce of the suspended mass on them).
+and damping ratio 0.3 (k 9.1 kN/m, c 540 N s/m; the quoted ranges are about 1.5-2 Hz and 0.2-0.4; such a
+seat isolates above √2 × 1.6 = 2.3 Hz, where ISO 5007's inputs peak, 2.2-3.2 Hz); ±50 mm free travel (a
+100 mm stroke); rubber end stops of 200 kN/m (22 times the spring, a 7.5 Hz bounce of the suspended mass
+on them).  A measured seat's values belong in a seat file (:func:`read_seat`).
 """
 
 from __future__ import annotations
@@ -109,6 +110,11 @@ class SeatModel:
         s = 2j * np.pi * np.asarray(frequency_hz, dtype=float)
         k, c, m = self.stiffness_N_per_m, self.damping_N_s_per_m, self.mass_kg
         return (c * s + k) / (m * s * s + c * s + k)
+
+    @classmethod
+    def from_json(cls, path) -> "SeatModel":
+        """The seat of a PARAMS JSON file (:func:`read_seat`)."""
+        return read_seat(path)
 
     def to_json(self) -> dict:
         """The seat's values (the file's keys) with its natural frequency and damping ratio (SI units)."""
