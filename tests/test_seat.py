@@ -172,6 +172,45 @@ def test_ride_on_a_soft_seat_isolates_and_a_stiff_seat_follows_the_floor():
     assert runs["stiff"].suspension.seat_factor == pytest.approx(1.0, abs=0.02)
 
 
+def test_seat_a_w_in_rides_on_an_iso_8608_road_matches_the_spectral_prediction():
+    """The occupant's a_w over three 300 s rides on class C roads against √(∫ |Wk H|² Σ_ij G_i S_ij G_j* df), with
+    the floor's transfers G_i and the seat's H from python-control, Annex A's Wk coded here (tests/test_ride.py's
+    reference with the seat added); the package's own PSD prediction (``psd_rating`` with the seat) as well."""
+    from identification.comfort.expected import psd_rating
+    from identification.comfort.ride import ROAD_SPACING_M, ride
+    from identification.comfort.road import iso8608_psd, road_profile, track_coherence
+    from identification.model.ride import seat_row
+    from test_ride import SEAT_X, SEAT_Y, SPEED, WHEELBASE, _body as ride_body, _seat_transfer
+    from tractor_cases import C, K, TIRES
+
+    seat = SeatModel(stiffness_N_per_m=3600.0, damping_N_s_per_m=340.0, travel_m=0.1)
+    body, duration, squares = ride_body(False), 300.0, []
+    sets = {"t": (dict(zip(TIRES, K)), dict(zip(TIRES, C)))}
+    for seed in (1, 2, 3):
+        road = road_profile("C", SPEED * duration + 1.0, ROAD_SPACING_M, seed)
+        run = ride(body, sets, road=road, speed_m_s=SPEED, duration_s=duration, seat_x_m=SEAT_X, seat_y=SEAT_Y,
+                   seat=seat)["t"]
+        assert run.suspension.response.end_stop_hits == 0
+        squares.append(run.comfort.a_w ** 2)
+    simulated = math.sqrt(np.mean(squares))
+    f = np.linspace(0.05, 40.0, 8000)
+    n = f / SPEED
+    S = iso8608_psd(n, "C") / SPEED
+    gamma = np.sqrt(track_coherence(n, road.track_width_m, decay=road.coherence_decay))
+    delay = np.array([0.0, 0.0, WHEELBASE / SPEED, WHEELBASE / SPEED])
+    left = np.array([True, False, True, False])
+    floor_psd = np.zeros_like(f)
+    for m, fm in enumerate(f):
+        G = _seat_transfer(body, 2 * math.pi * fm) * np.exp(-2j * math.pi * fm * delay)
+        floor_psd[m] = np.real(G @ (np.where(left[:, None] == left[None, :], 1.0, gamma[m]) * S[m]) @ G.conj())
+    h2 = np.abs(_control_transmissibility(seat, f)) ** 2
+    predicted = math.sqrt(np.trapezoid(_wk_magnitude(f) ** 2 * h2 * floor_psd, f))
+    assert simulated == pytest.approx(predicted, rel=0.03), (simulated, predicted)        # measured -0.4 %
+    package = psd_rating(body, dict(zip(TIRES, K)), dict(zip(TIRES, C)), seat_row(body, seat_x_m=SEAT_X, seat_y=SEAT_Y),
+                         road=road, speed_m_s=SPEED, transfer=seat.transmissibility)
+    assert package == pytest.approx(predicted, rel=0.01)
+
+
 @pytest.fixture
 def seat_file(tmp_path):
     def write(text, name="seat.json"):
