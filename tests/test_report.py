@@ -78,7 +78,7 @@ def test_demo_report_sections_tables_images(demo, cli):
     assert str(out) not in html and "identification/data" not in html
 
 
-def test_demo_tables_are_downloadable_and_say_what_the_report_says(demo):
+def test_demo_tables_are_downloadable_and_say_what_the_report_says(demo, cli):
     import csv
     code, out = demo
     html = (out / "report.html").read_text()
@@ -96,7 +96,20 @@ def test_demo_tables_are_downloadable_and_say_what_the_report_says(demo):
         # the rig truth beside the estimates (display only), from the truth file next to the recording
         assert float(row["k_truth_N_m"]) == pytest.approx(float(row["k_N_m"]), rel=0.03)
     ride = list(csv.DictReader((out / "tables" / "ride.csv").open()))
-    assert {r["set"] for r in ride} == {"paper", "final", "static=300e3"} and len(ride) == 6
+    assert {r["set"] for r in ride} == {"paper", "final", "static"} and len(ride) == 6
+    # the static set comes from the demo's compression test, named in the table; its k is what `static` says
+    from identification.recording.examples import compression_path
+    static_k = json.loads(cli("static", compression_path(), "--json").out)["k_static_N_per_m"]
+    for row in ride:
+        assert (row["static_source"] == "testday_compression.csv") == (row["set"] == "static")
+        if row["set"] == "static":
+            assert float(row["k_FL_N_m"]) == pytest.approx(static_k, rel=1e-12)
+        # expected values over 30 roads: the interval of the mean holds the mean, one ride's is wider
+        lo, hi = float(row["a_w_mean_lo"]), float(row["a_w_mean_hi"])
+        assert int(row["realisations"]) == 30 and lo < float(row["a_w_mean_m_s2"]) < hi
+        assert float(row["a_w_one_ride_lo"]) < lo and hi < float(row["a_w_one_ride_hi"])
+        # the PSD's a_w (the model's frequency response on the road spectrum) agrees with the mean of 30 rides
+        assert float(row["a_w_psd_m_s2"]) == pytest.approx(float(row["a_w_mean_m_s2"]), rel=0.05)
 
 
 def test_demo_fmus_are_valid_and_listed(demo):
@@ -149,10 +162,16 @@ def test_demo_recommends_one_joint_k_c_per_tire_within_the_truth(demo):
             assert f"<b>{rec['k'] / 1e3:.2f}</b>" in table
         # the ride: the final set is the recommended one, rated at the seat beside the paper's and a static one
         ride = r["ride"]
-        assert set(ride["sets"]) == {"paper", "final", "static=300e3"}
+        assert set(ride["sets"]) == {"paper", "final", "static"}
+        assert ride["static"]["file"] == "testday_compression.csv" and "testday_compression.csv" in html
         assert ride["sets"]["final"]["k"] == {t: r["tires"][t]["recommended"]["k"] for t in r["tires"]}
         assert all(s["a_w"] > 0 and s["vdv"] > 0 for s in ride["sets"].values())
-        assert f'{ride["sets"]["final"]["a_w"]:.3f}' in html
+        # the page quotes the expected a_w with its interval, not one road's ride
+        e = ride["sets"]["final"]["expected"]["a_w"]
+        assert f'<td>{e["mean"]:.3f}</td><td>{e["mean_interval"][0]:.3f}–{e["mean_interval"][1]:.3f}</td>' in html
+        # the compression test's static stiffness is below the dynamic one by the paper's 100-170 kN/m (section 4)
+        static_k = ride["sets"]["static"]["k"]["FL"]
+        assert 100e3 <= truth["tires"]["FL"]["k"] - static_k <= 170e3
 
 
 def test_report_renders_in_headless_chromium(demo, tmp_path):
@@ -319,3 +338,26 @@ def test_the_summary_shows_what_conditioning_and_diagnosis_warned_of():
     assert all(f"warning: {w.replace('<', '&lt;').replace('>', '&gt;')}" in rows[0] for w in warned)
     assert "warning" not in rows[1]
 
+
+
+def test_report_rides_without_a_static_set_unless_given_a_compression_test(cli, tmp_path):
+    """No compression test, no static row (the page says how to add one); a file that is not a compression
+    test is refused in one line naming it, before anything is written."""
+    import shutil
+
+    from identification.recording.examples import example_path
+    day = tmp_path / "day"
+    day.mkdir()
+    for suffix in (".csv", ".json"):
+        shutil.copy(example_path("7kmh").with_suffix(suffix), day)
+    bad = tmp_path / "press.csv"
+    bad.write_text("deformation_mm,force_kN\n1,2\n")
+    res = cli("report", day, "-o", tmp_path / "refused", "--static", bad)
+    assert res.code == 2 and res.err.startswith(f"cleatfmu: error: {bad}: ") and res.err.count("\n") == 1, res.err
+    assert not (tmp_path / "refused").exists()
+    out = tmp_path / "out"
+    res = cli("report", day, "-o", out, "--workers", "2")
+    assert res.code == 0, res.err
+    ride = json.loads((out / "summary.json").read_text())["recordings"][0]["ride"]
+    assert set(ride["sets"]) == {"paper", "final"} and "static" not in ride
+    assert "No static set: no compression test was given" in (out / "report.html").read_text()

@@ -148,6 +148,18 @@ def test_runs_of_one_condition_share_position_speed_load_and_names():
     assert single["k"]["ci"] == [5.5e5 - 500, 5.5e5 + 500]      # its own interval, as the fit gave it
 
 
+def test_runs_at_another_inflation_pressure_are_another_condition():
+    """The pressure changes a tire's k (Lines & Murphy): runs 5 % or more apart are not pooled, and a run
+    whose sidecar gives no pressure is pooled only with runs without one."""
+    runs = [dict(_run(rec=r), pressure_Pa=p) for r, p in
+            (("a", 160e3), ("b", 164e3), ("c", 120e3), ("d", None), ("e", None), ("f", 170e3))]
+    groups = {tuple(r["recording"] for r in g) for g in group_runs(runs)}
+    assert groups == {("a", "b"), ("c",), ("d", "e"), ("f",)}
+    rows = {tuple(row["recordings"]): row for row in campaign_conditions(runs)}
+    assert rows[("a", "b")]["inflation_pressure_Pa"] == pytest.approx(162e3)
+    assert rows[("d", "e")]["inflation_pressure_Pa"] is None
+
+
 def test_a_tire_named_per_position_is_its_own_condition():
     from identification.report.campaign import condition_names
     assert condition_names({"tire": {"FL": "380/85 R 28", "RL": "460/85 R 38"}, "vehicle": "T1"}, "FL") == \
@@ -173,11 +185,11 @@ def test_the_verdict_names_where_each_interval_comes_from():
     result = BatchResult(recordings=recs, out_dir="/out", seconds=1.0, timings={})
     tables = build_tables(result, {})
     html = verdict_section(result, tables)
-    rows = tables["campaign"].rows
-    assert [(r[0], r[3], r[7]) for r in rows] == [("FL", 7.0, 3), ("FL", 10.0, 1)]
-    assert rows[0][-2] == "between-run scatter" and rows[1][-2] == "within-run only"
+    rows = [dict(zip(tables["campaign"].columns, r)) for r in tables["campaign"].rows]
+    assert [(r["tire"], r["speed_km_h"], r["runs"]) for r in rows] == [("FL", 7.0, 3), ("FL", 10.0, 1)]
+    assert rows[0]["interval_source"] == "between-run scatter" and rows[1]["interval_source"] == "within-run only"
     # 533 333 ± 62 517 N/m as in the hand computation above: shown to whole kN/m, the bounds outwards
-    assert rows[0][9] == 533_000.0 and rows[0][10] <= 510e3 and rows[0][11] >= 560e3
+    assert rows[0]["k_N_m"] == 533_000.0 and rows[0]["k_ci_low"] <= 510e3 and rows[0]["k_ci_high"] >= 560e3
     assert "<b>533</b>" in html and "between-run scatter of 3 runs" in html and ONE_RUN in html
     assert "disagree beyond their fit intervals" in html
     intro = html[:html.index("</p>")]

@@ -182,3 +182,19 @@ def test_missing_file_and_bad_options(tmp_path, cli, registered):
     assert res.code == 2 and "must end with .png" in res.err and not (tmp_path / "out.pdf").exists()
     res = cli("static", path, "--segments", "0")
     assert res.code == 2 and "--segments" in res.err
+
+
+def test_the_embedded_compression_test_is_the_rigs_and_holds_its_truth(tmp_path):
+    """The demo's compression test is what the rig's standard linear solid writes; eq. 18 on it gives the
+    truth's relaxed (static) stiffness within its 95 % interval, not the dynamic one the cleat sees."""
+    import json
+
+    from identification.recording.examples import compression_path
+    from identification.rig.compression import write_compression
+    shipped = compression_path()
+    assert write_compression(tmp_path / "testday_compression").read_text() == shipped.read_text()
+    truth = json.loads(shipped.with_name("testday_compression.truth.json").read_text())["parameters"]
+    result = static_stiffness_file(shipped)
+    lo, hi = result.k_ci95_N_per_m
+    assert lo < truth["k_static_N_m"] < hi and hi < truth["k_dynamic_N_m"]
+    assert result.local_slope_range < 0.02          # a linear tire (the paper's Figure 10): local slopes agree

@@ -64,7 +64,7 @@ def written_lines(out: Path) -> list[str]:
 
 
 def _run(paths, out, *, title: str, command: str, workers: int | None, extra: dict | None = None,
-         scheduler: str | None = None) -> int:
+         scheduler: str | None = None, static=None) -> int:
     """Run the batch over `paths` into `out` and write the report; the exit status (2 if anything failed).
 
     The arguments are checked first (nothing is written for a bad one); the start line is printed before
@@ -79,6 +79,9 @@ def _run(paths, out, *, title: str, command: str, workers: int | None, extra: di
     if out.exists() and not out.is_dir():
         raise InputError(out, "exists and is not a directory")
     check_folder(out)                   # a part of the path is a file: refused before anything is done
+    if static is not None:              # the compression test is read before anything is written
+        from ..report.ride import static_source
+        static = static_source(static)
     from .._folders import FolderSet, raise_write_error
     from ..report.files import replace_refusal
 
@@ -92,7 +95,7 @@ def _run(paths, out, *, title: str, command: str, workers: int | None, extra: di
         from ..report.html import write_report
 
         announce_compilation()
-        result = run_batch(paths, new, workers=workers, scheduler=scheduler)
+        result = run_batch(paths, new, workers=workers, scheduler=scheduler, static=static)
         raise_write_error(result.failures)      # a job that could not write (a full disk): the run failed
         t_report = time.perf_counter()
         write_report(result, title=title, extra=extra)
@@ -113,17 +116,18 @@ def _run(paths, out, *, title: str, command: str, workers: int | None, extra: di
 
 def run_demo(args) -> int:
     """``cleatfmu demo``: the whole chain on the embedded test day."""
-    from ..recording.examples import EXAMPLES, example_path
+    from ..recording.examples import EXAMPLES, compression_path, example_path
     paths = [example_path(name) for name in EXAMPLES]
     return _run(paths, args.out, title="cleatfmu demo: the embedded cleat-test day", command="demo",
-                workers=args.workers, extra={"data": "embedded test day: " + ", ".join(p.name for p in paths)})
+                workers=args.workers, static=compression_path(),
+                extra={"data": "embedded test day: " + ", ".join(p.name for p in [*paths, compression_path()])})
 
 
 def run_report(args) -> int:
     """``cleatfmu report``: the whole chain over the recordings named."""
     from ..report.batch import collect_recordings
     return _run(collect_recordings(args.inputs), args.output, title=args.title, command="report",
-                workers=args.workers, scheduler=args.scheduler)
+                workers=args.workers, scheduler=args.scheduler, static=args.static)
 
 
 #: The output contract, as the commands' help says it.
@@ -139,7 +143,9 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "demo", help="run the whole chain on the embedded test day and write a report",
         description="Identify every tire of the embedded cleat-test day (paper's and waveform method), export the "
-                    "tire FMUs, co-simulate them, diagnose, export the extended FMUs, co-simulate again, and write "
+                    "tire FMUs, co-simulate them, diagnose, export the extended FMUs, co-simulate again, ride the "
+                    "tractor on ISO 8608 roads with the paper's, the diagnosed and the embedded compression test's "
+                    "static stiffness, and write "
                     "DIR/report.html (self-contained) with DIR/fmu/, DIR/params/ and DIR/summary.json. DIR and "
                     "its missing parents are created. " + _ONE_SET.replace("OUT", "DIR"))
     p.add_argument("--out", default="cleatfmu-demo", metavar="DIR", help="output folder (default: %(default)s)")
@@ -154,6 +160,10 @@ def add_parser(subparsers) -> None:
     r.add_argument("-o", "--output", required=True, metavar="OUT",
                    help="output folder (created with its missing parents)")
     r.add_argument("--title", default="cleatfmu report", help="report title")
+    r.add_argument("--static", metavar="COMPRESSION.csv", default=None,
+                   help="a compression test (as 'cleatfmu static' reads it): its static stiffness rides beside "
+                        "the cleat test's k in every recording's ride comparison, named by the file (default: no "
+                        "static set)")
     r.add_argument("--workers", type=int, default=workers, help="processes (default: the machine's cores)")
     r.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="run the jobs on a Dask distributed cluster (e.g. tcp://host:8786; the recordings and OUT "

@@ -148,7 +148,8 @@ def run(args) -> int:
             print(f"cleatfmu: warning: set {name}: {entry['expected']['contact']['warning']}", file=sys.stderr)
     if args.plot:
         from ..report.plots import plot_ride, save_png
-        save_png(plot_ride(runs, road_class=args.road, speed_m_s=speed), args.plot)
+        save_png(plot_ride(runs, road_class=args.road, speed_m_s=speed,
+                           expected={n: v["expected"] for n, v in doc["sets"].items()}), args.plot)
     if args.json:
         print(json_text(doc))
     else:

@@ -182,9 +182,10 @@ def _point_contact(k: float, c: float, load: float) -> dict:
     return dict(tire_law.EXTENDED_DEFAULTS, stiffness=float(k), damping=float(c), static_load=float(load))
 
 
-#: The report's ride: road class, seed, duration (s), parameter sets (a static stiffness within the
-#: paper's Table 5 range, 276-322 kN/m).
-REPORT_RIDE = {"road_class": "B", "seed": 1, "duration_s": 60.0, "names": ("paper", "final", "static=300e3")}
+#: The report's ride: road class, first seed, duration (s), road realisations, tire law and parameter sets
+#: (``report --static`` adds a compression test's static stiffness).
+REPORT_RIDE = {"road_class": "B", "seed": 1, "duration_s": 60.0, "realisations": 30, "tires": "auto",
+               "names": ("paper", "final")}
 
 
 def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m_s: float | None = None,

@@ -33,7 +33,9 @@ fit intervals then understate the uncertainty, and only the pooled interval is t
 
 **Conditions** (:func:`group_runs`): runs of one condition share the tire position, the speed (every
 run within 0.5 km/h of the group's slowest, :data:`SPEED_TOLERANCE_KMH`), the static wheel load of that
-tire (within 2 % of the group's first run, :data:`LOAD_RTOL`) and what the sidecars name: a sidecar key
+tire (within 2 % of the group's first run, :data:`LOAD_RTOL`), its inflation pressure (the sidecar's
+``inflation_pressure_kPa``, within 5 % of the group's first run, :data:`PRESSURE_RTOL`; a run without one
+is only pooled with runs without one) and what the sidecars name: a sidecar key
 ``"vehicle"`` or ``"tire"`` (free text; ``"tire"`` may be an object per position, ``{"FL": "380/85 R 28"}``)
 keeps runs of differently named vehicles or tires apart, and a run without a name is only pooled with
 runs without one.  The cleat and the description are not compared.  A condition of one run keeps that
@@ -52,7 +54,8 @@ import math
 import numpy as np
 
 __all__ = ["pool_runs", "reml_tau2", "supported_step", "rounded_interval", "condition_names", "group_runs",
-           "campaign_conditions", "batch_runs", "NAME_KEYS", "SPEED_TOLERANCE_KMH", "LOAD_RTOL", "ONE_RUN", "LEVEL"]
+           "campaign_conditions", "batch_runs", "NAME_KEYS", "SPEED_TOLERANCE_KMH", "LOAD_RTOL", "PRESSURE_RTOL",
+           "ONE_RUN", "LEVEL"]
 
 #: Sidecar keys that name what was tested: runs naming a different vehicle or tire are never pooled.
 NAME_KEYS = ("vehicle", "tire")
@@ -60,6 +63,9 @@ NAME_KEYS = ("vehicle", "tire")
 SPEED_TOLERANCE_KMH = 0.5
 #: Runs whose static wheel load is within this fraction of the group's first run's are at one load.
 LOAD_RTOL = 0.02
+#: Runs whose inflation pressure is within this fraction of the group's first run's are at one pressure (a
+#: field gauge reads to a few kPa; a tire at 80 kPa and at 120 kPa is two conditions).
+PRESSURE_RTOL = 0.05
 #: What a condition of one run says about its interval.
 ONE_RUN = "one run: no repeatability measured"
 #: Confidence level of every interval.
@@ -222,13 +228,21 @@ def condition_names(extra: dict, tire: str | None = None) -> dict:
     return out
 
 
+def _alike(value, ref, rtol: float) -> bool:
+    """Both undeclared, or both declared and within `rtol` of `ref`."""
+    if value is None or ref is None:
+        return value is None and ref is None
+    return abs(value - ref) <= rtol * ref
+
+
 def group_runs(runs: list) -> list[list]:
     """Runs of one condition together (the rule in the module's docstring).
 
     Parameters
     ----------
     runs : list of dict
-        Each with ``tire``, ``speed_kmh``, ``wheel_load_N`` (or None) and ``names`` (dict).
+        Each with ``tire``, ``speed_kmh``, ``wheel_load_N`` (or None), ``names`` (dict) and optionally
+        ``pressure_Pa`` (the tire's inflation pressure, or None).
 
     Returns
     -------
@@ -241,11 +255,10 @@ def group_runs(runs: list) -> list[list]:
                                            r["speed_kmh"])):
         for g in groups:
             first = g[0]
-            load, ref = run["wheel_load_N"], first["wheel_load_N"]
             if (run["tire"] == first["tire"] and run["names"] == first["names"]
                     and run["speed_kmh"] - first["speed_kmh"] <= SPEED_TOLERANCE_KMH + 1e-9
-                    and ((load is None and ref is None)
-                         or (load is not None and ref is not None and abs(load - ref) <= LOAD_RTOL * ref))):
+                    and _alike(run["wheel_load_N"], first["wheel_load_N"], LOAD_RTOL)
+                    and _alike(run.get("pressure_Pa"), first.get("pressure_Pa"), PRESSURE_RTOL)):
                 g.append(run)
                 break
         else:
@@ -288,28 +301,31 @@ def batch_runs(result) -> list[dict]:
             if rec is None:
                 continue
             load = (r.wheel_load_N or {}).get(t.tire)
+            pressure = ((r.conditions or {}).get("inflation_pressure_Pa") or {}).get(t.tire)
             runs.append({"recording": r.stem, "tire": t.tire, "speed_kmh": float(r.speed_kmh),
                          "wheel_load_N": None if load is None else float(load),
+                         "pressure_Pa": None if pressure is None else float(pressure),
                          "names": condition_names(r.names, t.tire), "k": rec["k"], "k_ci": list(rec["k_ci"]),
                          "c": rec["c"], "c_ci": list(rec["c_ci"])})
     return runs
 
 
 def campaign_conditions(runs: list) -> list[dict]:
-    """Per condition (tire, speed, load, names) the pooled k and c: one row per tire and speed.
+    """Per condition (tire, speed, load, pressure, names) the pooled k and c: one row per tire and condition.
 
     Parameters
     ----------
     runs : list of dict
         One per recording and tire with a recommended k and c: ``recording``, ``tire``, ``speed_kmh``,
-        ``wheel_load_N`` (N or None), ``names`` (:func:`condition_names`), ``k``, ``k_ci``, ``c``, ``c_ci``
+        ``wheel_load_N`` (N or None), ``pressure_Pa`` (optional, Pa or None), ``names``
+        (:func:`condition_names`), ``k``, ``k_ci``, ``c``, ``c_ci``
         (N/m, N·s/m).
 
     Returns
     -------
     list of dict
         Per condition: ``tire``, ``names``, ``speed_m_s`` (the runs' mean) and ``speed_m_s_range``,
-        ``wheel_load_N`` (mean), ``runs`` (their number), ``recordings``, ``k`` and ``c``
+        ``wheel_load_N`` and ``inflation_pressure_Pa`` (means, None where undeclared), ``runs`` (their number), ``recordings``, ``k`` and ``c``
         (:func:`pool_runs`'s document with the runs' ``runs`` values and the ``rounded`` value and
         interval), ``interval_source`` ("between-run scatter" or "within-run only"), ``runs_disagree``
         (k or c) and ``note`` (where the interval comes from, in words).
@@ -318,10 +334,12 @@ def campaign_conditions(runs: list) -> list[dict]:
     for group in group_runs(runs):
         speeds = [r["speed_kmh"] / 3.6 for r in group]
         loads = [r["wheel_load_N"] for r in group if r["wheel_load_N"] is not None]
+        pressures = [r["pressure_Pa"] for r in group if r.get("pressure_Pa") is not None]
         k, c = _pooled(group, "k"), _pooled(group, "c")
         out.append({"tire": group[0]["tire"], "names": dict(group[0]["names"]),
                     "speed_m_s": float(np.mean(speeds)), "speed_m_s_range": [min(speeds), max(speeds)],
-                    "wheel_load_N": float(np.mean(loads)) if loads else None, "runs": len(group),
+                    "wheel_load_N": float(np.mean(loads)) if loads else None,
+                    "inflation_pressure_Pa": float(np.mean(pressures)) if pressures else None, "runs": len(group),
                     "recordings": [r["recording"] for r in group], "k": k, "c": c,
                     "interval_source": k["source"], "runs_disagree": k["runs_disagree"] or c["runs_disagree"],
                     "note": _note(len(group))})

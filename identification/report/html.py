@@ -29,6 +29,7 @@ from ..diagnose.joint_evidence import interval_text
 from .files import not_recommended_params, point_contact_fmu, recommended_fmu, recommended_params
 from .tables import (METHODS_HEADS, TABLE4_HEADS, campaign_table, csv_text, read_truth, ride_table, table4_table,
                      verdict_table, waveform_table)
+from .ride import ride_section
 from .verdict import agreement_text, fmus_section, not_recommended_reason, verdict_section
 
 __all__ = ["render_report", "write_report"]
@@ -174,7 +175,10 @@ def _diagnosis_section(r) -> str:
         out.append(f'<p>Effects the four-corner model misses: <b>{_e(effects)}</b>. Front axle {body["front_axle"]}'
                    f'{"; " + indices if indices else ""}. Speed {speed["sidecar"] * 3.6:.2f} km/h (sidecar){delay}. '
                    + agreement_text(d["agreement"])
-                   + f'; diagnosis {d["seconds"]:.1f} s. Intervals: {_e(d["intervals"])}.</p>')
+                   + f'; diagnosis {d["seconds"]:.1f} s'
+                   + (f' (and {d["compile_seconds"]:.1f} s compiling the model\'s code, once per install)'
+                      if d.get("compile_seconds") else "")
+                   + f'. Intervals: {_e(d["intervals"])}.</p>')
         for name in d["effects"]:
             out.append(f'<div class="effect"><b>{_e(name)}</b>: {_e(d["evidence"].get(name, ""))}</div>')
         if "diagnosis" in rep.figures:
@@ -182,36 +186,10 @@ def _diagnosis_section(r) -> str:
         if "impacts" in rep.figures:
             out.append(_img(rep.figures["impacts"], f"{r.stem} impacts"))
     if rep.ride is not None:
-        out.append(_ride(r.stem, rep))
+        out.append(ride_section(rep.ride, _img(rep.figures["ride"], f"{r.stem} ride comfort")
+                                if "ride" in rep.figures else ""))
     out.append("</section>")
     return "".join(out)
-
-
-def _versus_final(d: dict) -> str:
-    """' a_w against the final set's: paper +11 %, ...' (empty without a final set)."""
-    sets = d["sets"]
-    if "final" not in sets or len(sets) < 2:
-        return ""
-    ref = sets["final"]["a_w"]
-    parts = [f'{_e(name)} {100 * (r["a_w"] / ref - 1):+.0f} %' for name, r in sets.items() if name != "final"]
-    return " a_w against the final set's: " + ", ".join(parts) + "."
-
-
-def _ride(stem: str, rep) -> str:
-    """The diagnosed tractor on an ISO 8608 road with each parameter set: ISO 2631-1 at the seat."""
-    d = rep.ride
-    rows = "".join(f'<tr><td class="l">{_e(name)}</td><td>{"/".join(f"{v / 1e3:.0f}" for v in r["k"].values())}'
-                   f'</td><td>{r["a_w"]:.3f}</td><td>{r["vdv"]:.3f}</td><td>{r["mtvv"]:.3f}</td>'
-                   f'<td>{r["crest_factor"]:.2f}</td></tr>' for name, r in d["sets"].items())
-    road = d["road"]
-    return (f'<h4>Ride comfort: the tractor on an ISO 8608 class {_e(road["class"])} road</h4>'
-            f'<p>The {_e(d["body"]["source"])} at {d["speed_m_s"] * 3.6:.3g} km/h for '
-            f'{d["duration_s"]:g} s (road seed {road["seed"]}), once per tire parameter set; the "seat" is the '
-            f'point of the body {d["seat"]["x_m"]:.2f} m behind the front axle, rated by ISO 2631-1 (Wk): a floor '
-            f'value, without seat suspension or cushion.{_versus_final(d)}</p>'
-            '<table><tr><th class="l">set</th><th>k FL/FR/RL/RR, kN/m</th><th>a_w, m/s²</th>'
-            f'<th>VDV, m/s^1.75</th><th>MTVV, m/s²</th><th>crest factor</th></tr>{rows}</table>'
-            + (_img(rep.figures["ride"], f"{stem} ride comfort") if "ride" in rep.figures else ""))
 
 
 def _tire_section(r, t) -> str:

@@ -227,18 +227,34 @@ def finish_channel_figure(fig, axes, title: str):
     return fig
 
 
-def plot_ride(runs, *, road_class: str, speed_m_s: float):
-    """The seat's vertical acceleration (the rated ride's first 10 s) and a_w (Wk) per parameter set."""
+def plot_ride(runs, *, road_class: str, speed_m_s: float, expected: dict | None = None):
+    """The seat's vertical acceleration (the first road's first 10 s) and a_w (Wk) per parameter set.
+
+    With `expected` (set name -> the ``expected`` entry of ``ride --json``) the bars are the expected a_w over
+    the road realisations with the 95 % interval of that mean, a thin line spans the single-ride 95 %
+    interval, and a dot marks the first road's ride; without it the bars are that ride's a_w.
+    """
     fig, (ax, bx) = figure(1, 2, size=(11.0, 3.8), gridspec_kw={"width_ratios": [3, 1]})
     for i, (name, r) in enumerate(runs.items()):
         window = r.time_s < r.time_s[0] + 10.0
         ax.plot(r.time_s[window], r.seat_m_s2[window], lw=0.8, color=f"C{i}", label=name)
-        bx.bar(i, r.comfort.a_w, color=f"C{i}")
+        e = (expected or {}).get(name)
+        if e is None:
+            bx.bar(i, r.comfort.a_w, color=f"C{i}")
+            continue
+        a = e["a_w"]
+        lo, hi = a["mean_interval"]
+        bx.bar(i, a["mean"], yerr=[[a["mean"] - lo], [hi - a["mean"]]], capsize=4, color=f"C{i}", alpha=0.8)
+        bx.vlines(i + 0.25, *a["single_ride_interval"], color="k", lw=1.0)
+        bx.plot(i + 0.25, r.comfort.a_w, "k.", ms=5)
     ax.set_xlabel("time / s")
     ax.set_ylabel("seat vertical acceleration / m/s²")
     ax.legend(loc="upper right", fontsize=8)
-    ax.set_title(f"ISO 8608 class {road_class} road, {speed_m_s * 3.6:.3g} km/h (the rated ride's first 10 s)")
+    ax.set_title(f"ISO 8608 class {road_class} road, {speed_m_s * 3.6:.3g} km/h (the first road's first 10 s)")
     bx.set_xticks(range(len(runs)), list(runs), rotation=30, ha="right", fontsize=8)
+    if expected:
+        n = next(iter(expected.values()))["realisations"]
+        bx.set_title(f"expected over {n} roads (95 %);\n| one ride's 95 %, · first road", fontsize=8)
     bx.set_ylabel("a_w (Wk) / m/s²")
     fig.tight_layout()
     return fig

@@ -164,7 +164,7 @@ def campaign_table(result) -> Table:
     from .campaign import batch_runs, campaign_conditions
 
     table = Table("campaign", ["tire", "vehicle", "tire_name", "speed_km_h", "speed_km_h_min", "speed_km_h_max",
-                               "wheel_load_N", "runs", "recordings", "k_N_m", "k_ci_low", "k_ci_high",
+                               "wheel_load_N", "inflation_pressure_kPa", "runs", "recordings", "k_N_m", "k_ci_low", "k_ci_high",
                                "k_between_run_sd_N_m", "k_q_p", "k_i2", "c_Ns_m", "c_ci_low", "c_ci_high",
                                "c_between_run_sd_Ns_m", "c_q_p", "c_i2", "runs_disagree", "interval_source",
                                "note"])
@@ -174,6 +174,7 @@ def campaign_table(result) -> Table:
         table.rows.append([row["tire"], row["names"].get("vehicle"), row["names"].get("tire"),
                            *(round(v * 3.6, 9) for v in (row["speed_m_s"], *row["speed_m_s_range"])),
                            row["wheel_load_N"],
+                           None if row["inflation_pressure_Pa"] is None else row["inflation_pressure_Pa"] / 1e3,
                            row["runs"], " ".join(row["recordings"]), kr["value"], *kr["ci"], k["between_run_sd"],
                            k["q_p"], k["i2"], cr["value"], *cr["ci"], c["between_run_sd"], c["q_p"], c["i2"],
                            row["runs_disagree"], row["interval_source"], row["note"]])
@@ -188,7 +189,8 @@ def campaign_table(result) -> Table:
                       + "<br>".join(agree))
         names = " ".join(_e(v) for v in row["names"].values())
         speeds = row["speed_m_s_range"]
-        cells = [f'<td class="l">{row["tire"]}{" " + names if names else ""}</td>',
+        kpa = "" if row["inflation_pressure_Pa"] is None else f' · {row["inflation_pressure_Pa"] / 1e3:.3g} kPa'
+        cells = [f'<td class="l">{row["tire"]}{" " + names if names else ""}{kpa}</td>',
                  f'<td>{row["speed_m_s"] * 3.6:.3g}' + (f' ({speeds[0] * 3.6:.3g}–{speeds[1] * 3.6:.3g})'
                                                          if speeds[1] > speeds[0] else "") + "</td>",
                  f'<td class="l" title="{_e(" ".join(row["recordings"]))}">{row["runs"]}</td>',
@@ -265,14 +267,21 @@ METHODS_HEADS = ['recording', 'tire', 'K paper', 'K waveform', 'K waveform 95 %'
 
 
 def ride_table(result) -> Table:
-    """Every recording's ride: a_w, VDV, MTVV and crest factor at the seat per parameter set."""
-    table = Table("ride", ["recording", "road_class", "speed_m_s", "set", "k_FL_N_m", "k_FR_N_m", "k_RL_N_m",
-                           "k_RR_N_m", "a_w_m_s2", "vdv_m_s175", "mtvv_m_s2", "crest_factor"])
+    """Every recording's ride per parameter set: expected a_w, VDV, MTVV over the road realisations with
+    the 95 % interval of the mean and of one ride, the PSD's a_w, and the first road's a_w."""
+    table = Table("ride", ["recording", "road_class", "realisations", "speed_m_s", "set", "k_FL_N_m", "k_FR_N_m",
+                           "k_RL_N_m", "k_RR_N_m", "a_w_mean_m_s2", "a_w_mean_lo", "a_w_mean_hi", "a_w_one_ride_lo",
+                           "a_w_one_ride_hi", "a_w_psd_m_s2", "vdv_mean_m_s175", "mtvv_mean_m_s2",
+                           "vector_sum_health_mean_m_s2", "a_w_first_road_m_s2", "tire_law", "static_source"])
     for r in result.recordings:
         d = r.diagnosis.ride if r.diagnosis is not None else None
         if d is None:
             continue
         for name, s in d["sets"].items():
-            table.rows.append([r.stem, d["road"]["class"], d["speed_m_s"], name, *s["k"].values(), s["a_w"],
-                               s["vdv"], s["mtvv"], s["crest_factor"]])
+            e = s["expected"]
+            table.rows.append([r.stem, d["road"]["class"], d["road"]["realisations"], d["speed_m_s"], name,
+                               *s["k"].values(), e["a_w"]["mean"], *e["a_w"]["mean_interval"],
+                               *e["a_w"]["single_ride_interval"], e["psd"]["a_w"], e["vdv"]["mean"],
+                               e["mtvv"]["mean"], e["vector_sum_health"]["mean"], s["a_w"], d["tires"],
+                               d["static"]["file"] if name == "static" and d.get("static") else ""])
     return table
