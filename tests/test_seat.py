@@ -11,8 +11,8 @@ import pytest
 from scipy import signal
 from scipy.integrate import solve_ivp
 
-from identification.comfort.seat import (DEFAULT_SEAT, SeatModel, class_psd, class_record, class_seat_factor,
-                                         seat_response, spectral_seat_factor)
+from identification.comfort.seat import (DEFAULT_SEAT, SeatModel, class_of_mass, class_psd, class_record,
+                                         class_seat_factor, seat_response, spectral_seat_factor)
 
 #: A long-stroke seat: the default seat's suspension with ±100 mm free travel, linear on the class inputs.
 LONG = SeatModel(travel_m=0.1)
@@ -98,6 +98,11 @@ def test_seat_factor_of_the_linear_seat_within_2_percent_of_the_frequency_domain
     # the floor's unweighted RMS is the class's, which the toolbox's test signals are scaled to
     assert got["input_rms"] == pytest.approx(CLASSES[name][3], rel=0.01)
     assert math.sqrt(np.trapezoid(_class_psd(f, name), f)) == pytest.approx(CLASSES[name][3], rel=0.01)
+
+
+def test_class_of_a_tractor_mass():
+    assert [class_of_mass(m) for m in (1500.0, 3600.0, 3601.0, 6500.0, 6501.0, 15000.0)] == \
+        ["I", "I", "II", "II", "III", "III"]
 
 
 def test_class_record_has_the_class_psd():
@@ -274,3 +279,12 @@ def test_ride_seat_on_the_embedded_example(cli, seat_file):
     assert entry["three_axes"]["axes"]["z"]["a_w"] == pytest.approx(entry["a_w"])
     assert entry["expected"]["psd"]["seat_factor_linear"] < 1.0
     assert entry["expected"]["seat_factor"]["mean"] == pytest.approx(susp["seat_factor"])
+    # the tractor's ISO 5007 class by its mass (ISO 5007's scope: I up to 3600 kg, II to 6500 kg, III above)
+    iso = doc["seat"]["iso5007"]
+    mass = iso["tractor_mass_kg"]
+    assert iso["class"] == ("I" if mass <= 3600 else "II" if mass <= 6500 else "III")
+    f = np.linspace(0.05, 60.0, 60000)
+    wk2s = _wk_magnitude(f) ** 2 * _class_psd(f, iso["class"])
+    h2 = np.abs(_control_transmissibility(SeatModel(stiffness_N_per_m=3600, damping_N_s_per_m=340), f)) ** 2
+    assert iso["seat_factor_linear"] == pytest.approx(math.sqrt(np.trapezoid(wk2s * h2, f) / np.trapezoid(wk2s, f)),
+                                                      rel=0.005)

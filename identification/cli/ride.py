@@ -251,6 +251,10 @@ def format_seat(doc: dict, source: str = "") -> str:
     lines = [f"suspended seat{' ' + source if source else ''}: {seat['mass_kg']:g} kg, natural frequency "
              f"{seat['natural_frequency_hz']:.2f} Hz, damping ratio {seat['damping_ratio']:.2f}, travel "
              f"+-{seat['travel_m'] * 1e3:g} mm (expected values; z a_w in m/s2)"]
+    iso = doc["seat"]["iso5007"]
+    lines.append(f"on ISO 5007 class {iso['class']} ({iso['tractor_mass']}; the wheel loads give "
+                 f"{iso['tractor_mass_kg']:.0f} kg): SEAT {iso['seat_factor']:.3f} (linear seat "
+                 f"{iso['seat_factor_linear']:.3f}), end-stop hits {iso['end_stops']['hits']}")
     for name, entry in doc["sets"].items():
         e = entry["expected"]
         lines.append(f"{name}: seat {e['a_w']['mean']:.3f}, floor {e['floor_a_w']['mean']:.3f}, SEAT "

@@ -188,6 +188,16 @@ REPORT_RIDE = {"road_class": "B", "seed": 1, "duration_s": 60.0, "realisations":
                "names": ("paper", "final")}
 
 
+def _seat_class(seat, body) -> dict:
+    """The seat's SEAT factor on the ISO 5007 input class of the tractor's mass (from its static wheel loads,
+    ballast included; the standard classes by unladen mass)."""
+    from ..recording import STANDARD_GRAVITY
+    from .seat import class_of_mass, class_seat_factor
+
+    mass = sum(body.loads_n) / STANDARD_GRAVITY
+    return {"tractor_mass_kg": mass, **class_seat_factor(seat, class_of_mass(mass))}
+
+
 def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m_s: float | None = None,
                     duration_s: float = 60.0, seat_x_m: float | None = None, seat_y: float = 0.0,
                     exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1, ssp_dir=None,
@@ -235,7 +245,7 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
            "speed_m_s": speed, "duration_s": float(duration_s), "tires": tires,
            "seat": {"x_m": seat_x, "y": float(seat_y), "height_m": height,
                     "values": FLOOR_VALUES if seat is None else SEAT_VALUES,
-                    **({} if seat is None else {"suspension": seat.to_json()})},
+                    **({} if seat is None else {"suspension": seat.to_json(), "iso5007": _seat_class(seat, body)})},
            "body": {"kind": body.kind, "pitch_index": body.pitch_index, "roll_index": body.roll_index,
                     **({"pivot_index": body.pivot_index} if body.pivot else {}), "source": how},
            "sets": {name: r.to_json() for name, r in runs.items()}}

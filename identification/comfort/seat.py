@@ -59,7 +59,7 @@ from ._checks import positive
 
 __all__ = ["SeatModel", "DEFAULT_SEAT", "read_seat", "SeatResponse", "seat_response", "SeatRide", "seat_ride",
            "InputClass", "ISO5007_CLASSES", "ISO5007_SOURCE", "class_psd", "class_record", "spectral_seat_factor",
-           "class_seat_factor", "CLASS_SAMPLE_RATE_HZ", "CLASS_DURATION_S"]
+           "class_seat_factor", "class_of_mass", "CLASS_SAMPLE_RATE_HZ", "CLASS_DURATION_S"]
 
 #: Plausible ranges of a seat's values (the file's keys): (low, high), inclusive.
 _RANGES = {"mass_kg": (10.0, 300.0), "stiffness_N_per_m": (100.0, 1e7), "damping_N_s_per_m": (0.0, 1e6),
@@ -311,11 +311,8 @@ ISO5007_CLASSES = {"I": InputClass("I", "up to 3600 kg", 3.0, 3.5, 9.25),
 ISO5007_SOURCE = ("ISO 5007:2003 classes as implemented by the HVLab HRV Toolbox (ISVR, University of "
                   "Southampton), hvtestspectrum.m issue 1.1 (2009): 8-pole Butterworth band, not checked against "
                   "the standard's text")
-#: Sampling rate (Hz) and length (s) of a class's random floor record by default.
-CLASS_SAMPLE_RATE_HZ = 200.0
-CLASS_DURATION_S = 120.0
-#: Settling time of the seat before a class record is rated, s.
-_SETTLE_S = 5.0
+#: Sampling rate (Hz), length (s) of a class's random floor record by default, and the seat's settling before it, s.
+CLASS_SAMPLE_RATE_HZ, CLASS_DURATION_S, _SETTLE_S = 200.0, 120.0, 5.0
 
 
 def _input_class(name) -> InputClass:
@@ -325,6 +322,13 @@ def _input_class(name) -> InputClass:
     if key not in ISO5007_CLASSES:
         raise InputError("--class", f"unknown ISO 5007 input class {name!r} (I, II or III)")
     return ISO5007_CLASSES[key]
+
+
+def class_of_mass(tractor_mass_kg: float) -> str:
+    """The ISO 5007 input class of a tractor of `tractor_mass_kg` (its unladen mass in the standard): ``I`` up
+    to 3600 kg, ``II`` up to 6500 kg, ``III`` above."""
+    m = positive("tractor_mass_kg", tractor_mass_kg)
+    return "I" if m <= 3600.0 else "II" if m <= 6500.0 else "III"
 
 
 def class_psd(frequency_hz, input_class) -> np.ndarray:
