@@ -156,13 +156,11 @@ def psd_rating(body: Body, k: dict, c: dict, row, *, road, speed_m_s: float, wei
         √E[a_w²], m/s².
     """
     from .iso2631 import weighting_response
-    from .road import iso8608_psd, track_coherence
-
     lo, hi = road.band_cpm
     f = np.geomspace(lo * speed_m_s, hi * speed_m_s, int(points))
     n = f / speed_m_s
-    s = iso8608_psd(n, road.road_class, band_cpm=None) / speed_m_s        # m²/Hz on each track
-    gamma = np.sqrt(track_coherence(n, road.track_width_m, decay=road.coherence_decay))
+    s = road.psd(n) / speed_m_s                   # m²/Hz on each track (NaN for a road from a file)
+    gamma = np.sqrt(road.coherence(n))            # the road's coherence model (uniform or by class)
     delay = np.array([0.0 if t in FRONT_TIRES else body.wheelbase_m / speed_m_s for t in body.tires])
     left = np.array([t in LEFT_TIRES for t in body.tires])
     h = seat_transfer(body, k, c, row, f) * np.exp(-2j * math.pi * f[:, None] * delay[None, :])
