@@ -106,3 +106,30 @@ def test_bad_coherence_options_raise_input_error(kwargs, match):
     road_class = kwargs.pop("road_class", "B")
     with pytest.raises(InputError, match=match):
         road_profile(road_class, 100.0, SPACING, 1, **kwargs)
+
+
+def test_the_expected_a_w_from_the_psd_uses_the_roads_coherence():
+    """The rides' √(mean a_w²) on class E roads with the class coherence (three 300 s rides) against the PSD
+    prediction of :func:`~identification.comfort.expected.psd_rating` for the same roads: within 3 % on the
+    seat's lateral axis, where the coherence matters (the uniform model's prediction is 9 % higher)."""
+    from identification.comfort.expected import psd_rating
+    from identification.comfort.ride import ROAD_SPACING_M, ride
+    from identification.comfort.seat_axes import axis_rows
+    from identification.model.tractor import Body
+    from tractor_cases import C, K, LOADS, TIRES
+
+    body = Body(TIRES, LOADS, 2.6, pitch=True, roll=True, pivot=False, pitch_index=0.8, roll_index=0.5)
+    k, c = dict(zip(TIRES, K)), dict(zip(TIRES, C))
+    lateral = []
+    for seed in (1, 2, 3):
+        road = road_profile("E", 601.0, ROAD_SPACING_M, seed, coherence="class")
+        run = ride(body, {"t": (k, c)}, road=road, speed_m_s=2.0, duration_s=300.0, seat_x_m=1.4, seat_y=0.3,
+                   seat_height_m=0.9)["t"]
+        lateral.append(run.axes.axes["y"].a_w ** 2)
+    simulated = math.sqrt(np.mean(lateral))
+    row = axis_rows(body, seat_x_m=1.4, seat_y=0.3, height_m=0.9, track_width_m=1.8)["y"]
+    predicted = psd_rating(body, k, c, row, road=road, speed_m_s=2.0, weighting="Wd")
+    uniform = psd_rating(body, k, c, row, road=road_profile("E", 601.0, ROAD_SPACING_M, 1), speed_m_s=2.0,
+                         weighting="Wd")
+    assert simulated == pytest.approx(predicted, rel=0.03)
+    assert uniform / simulated - 1 > 0.05

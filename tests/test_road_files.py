@@ -228,16 +228,16 @@ def test_ride_road_options_that_do_not_fit_end_in_one_line(cli, tmp_path, args, 
 
 
 def test_ride_saves_its_road_and_rides_the_saved_road_to_the_same_a_w(cli, tmp_path):
-    """``ride --save-road`` writes seed's generated road (class coherence here); ``ride --road-file`` on that file
-    gives every set the same a_w, the class reported as 'file'."""
+    """``ride --save-road`` writes seed's generated road (class coherence here, the first of two realisations);
+    ``ride --road-file`` on that file gives every set the same a_w, the class reported as 'file'."""
     saved = tmp_path / "out" / "road.crg"
     common = ("ride", "--example", "7kmh", "--compare", "final", "--duration-s", "10", "--json", "--workers", "1")
-    first = cli(*common, "--road", "D", "--coherence", "class", "--realisations", "1", "--save-road", saved)
+    first = cli(*common, "--road", "D", "--coherence", "class", "--realisations", "2", "--save-road", saved)
     assert first.code == 0, first.err
     again = cli(*common, "--road-file", saved)
     assert again.code == 0, again.err
     a, b = json.loads(first.out), json.loads(again.out)
-    assert a["road"]["class"] == "D" and a["road"]["coherence"] == "class"
+    assert a["road"]["class"] == "D" and a["road"]["coherence"] == "class" and a["road"]["realisations"] == 2
     assert b["road"]["class"] == "file" and b["road"]["file"] == str(saved) and b["road"]["realisations"] == 1
     assert b["road"]["length_m"] == pytest.approx(a["road"]["length_m"], rel=1e-12)
     assert b["sets"]["final"]["a_w"] == pytest.approx(a["sets"]["final"]["a_w"], rel=1e-6)

@@ -373,6 +373,7 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
     from .seat_axes import DEFAULT_SEAT_HEIGHT_M, axis_rows
 
     given = road if isinstance(road, RoadProfile) else None        # a road read from a file: one ride on it
+    options = dict(road or {}) if given is None else {}             # further road_profile keywords
     seeds = realisation_seeds(seed, 1 if given is not None else realisations)
     speed = rec.speed_m_s if speed_m_s is None else float(speed_m_s)
     body, sets, how = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers, body_doc=body_doc,
@@ -380,7 +381,7 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
     every = []
     for s in seeds:
         road_s = given if given is not None else road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M,
-                                                              s, **(road or {}))
+                                                              s, **options)
         every.append(ride(body, sets, road=road_s, speed_m_s=speed, duration_s=duration_s, seat_x_m=seat_x_m,
                           seat_y=seat_y, exposure_h=exposure_h, tires=tires,
                           seat_height_m=seat_height_m))
