@@ -57,7 +57,8 @@ def estimates():
 def test_estimated_coherence_follows_the_chosen_model_within_its_estimation_error(estimates, road_class):
     """Near each wavenumber the mean of the bins' estimated γ² is within 4 standard errors (plus the estimator's
     bias (1 - γ²)² / K) of Chrono's model: for K independent segments one bin's estimate has the standard
-    deviation √2 γ² (1 - γ²) / √K (Bendat & Piersol); half-overlapping Hann segments count as ~K = N / nperseg."""
+    deviation √2 γ² (1 - γ²) / √K (Bendat & Piersol); half-overlapping Hann segments count as about
+    K = N / nperseg."""
     road, n, coh = estimates[road_class]
     k = road.x_m.size / NPERSEG
     for n0 in WAVENUMBERS:

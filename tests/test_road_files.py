@@ -202,7 +202,8 @@ def _bad(tmp_path, kind):
 
 BAD = {"missing": "no such file", "directory": "is a directory", "fifo": "not a regular file",
        "csv-header": "expected 'x_m,left_m,right_m'", "csv-text": "line 9, column left_m: 'abc' is not a number",
-       "csv-nan": "line 11: left_m is not a finite number", "csv-spacing": "line 22: position 0.205 m is 50.0% of a step",
+       "csv-nan": "line 11: left_m is not a finite number",
+       "csv-spacing": "line 22: position 0.205 m is 50.0% of a step",
        "csv-cells": "line 5: expected 3 cells", "crg-separator": "no '$$$$' line",
        "crg-increment": "needs REFERENCE_LINE_INCREMENT", "crg-missing": "line 26: right_m is not a finite number",
        "crg-slope": "'reference line slope' is not supported"}

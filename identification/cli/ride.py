@@ -33,8 +33,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--example", metavar="NAME", help="an embedded recording instead of REC.csv (7kmh, 10kmh)")
     p.add_argument("--road", default=None, type=str.upper, help="ISO 8608 road class, A (best) .. E (default B)")
     p.add_argument("--coherence", choices=("uniform", "class"), default=None,
-                   help="coherence of the left and right tracks: uniform, exp(-2 n B) for every class (default), or "
-                        "class, measured per class A .. E (Project Chrono's RandomSurfaceTerrain; lower on rough roads)")
+                   help="coherence of the left and right tracks: uniform, exp(-2 n B) for every class (default), "
+                        "or class, measured per class A .. E (Project Chrono's RandomSurfaceTerrain; lower on rough "
+                        "roads)")
     p.add_argument("--road-file", metavar="ROAD.csv|ROAD.crg", default=None,
                    help="ride on this road (a road CSV x_m,left_m,right_m or an OpenCRG file) instead of a generated "
                         "one: one ride, the class reported as 'file'")

@@ -182,8 +182,9 @@ class RoadProfile:
         return {"standard": "ISO 8608", "road_class": self.road_class, "gd_n0_m3": self.gd_n0_m3,
                 "n0_cpm": ISO8608_N0_CPM, "waviness": ISO8608_WAVINESS, "band_cpm": list(self.band_cpm),
                 "length_m": self.length_m, "spacing_m": self.spacing_m, "n_points": int(self.x_m.size),
-                "coherence": self.coherence_model, "coherence_model": {"uniform": "exp(-a n B)", "class":
-                "[1 + (2 pi n B / Omega_p)^2]^(-p)"}.get(self.coherence_model, "none"), "coherence_decay": self.coherence_decay,
+                "coherence": self.coherence_model, "coherence_decay": self.coherence_decay,
+                "coherence_model": {"uniform": "exp(-a n B)", "class": "[1 + (2 pi n B / Omega_p)^2]^(-p)"}.get(
+                    self.coherence_model, "none"),
                 "track_width_m": self.track_width_m, "seed": self.seed, "period_m": self.period_m,
                 "rms_left_m": float(np.std(self.left_m)), "rms_right_m": float(np.std(self.right_m))}
 
@@ -194,7 +195,7 @@ class RoadProfile:
         return iso8608_psd(n_cpm, self.road_class, band_cpm=None)
 
     def coherence(self, n_cpm) -> np.ndarray:
-        """The tracks' magnitude-squared coherence γ²(n) the road was synthesised with (NaN for a road from a file)."""
+        """The tracks' magnitude-squared coherence γ²(n) the road was synthesised with (NaN for a file's road)."""
         if self.road_class == FILE_CLASS:
             return np.full(np.shape(n_cpm), np.nan)
         return model_coherence(n_cpm, self.track_width_m, model=self.coherence_model, road_class=self.road_class,
