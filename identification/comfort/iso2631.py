@@ -1,22 +1,17 @@
 """Whole-body vibration after ISO 2631-1:1997: frequency weightings, a_w, VDV, MTVV, daily exposure.
 
-The frequency weightings Wk (vertical), Wd (horizontal) and Wf (motion
-sickness), and the additional weightings Wc (seat-back fore-aft), We
-(rotational) and Wj (vertical under the head of a recumbent person), are the
-analog filters of the standard's Annex A, with the parameters of its Table A.1
-(:data:`WEIGHTINGS`; the same parameters are tabulated in ISO 8041).  :func:`weight` applies one to a sampled
-acceleration; :func:`comfort` evaluates a record by the basic method (weighted
-RMS a_w) and the additional methods (running RMS with MTVV, fourth-power
-vibration dose value VDV), and for Wk and Wd compares the daily exposure with
-the whole-body values of EU directive 2002/44/EC.
+The frequency weightings Wk (vertical), Wd (horizontal), Wf (motion sickness) and the additional Wc
+(seat-back fore-aft), We (rotational), Wj (vertical, under a recumbent person's head) are the analog
+filters of the standard's Annex A, with the parameters of its Table A.1 (:data:`WEIGHTINGS`; tabulated
+in ISO 8041 too).  :func:`weight` applies one to a sampled acceleration; :func:`comfort` evaluates a
+record by the basic method (weighted RMS a_w) and the additional methods (running RMS with MTVV,
+fourth-power vibration dose value VDV), and for Wk and Wd compares the daily exposure with the
+whole-body values of EU directive 2002/44/EC.
 
-Units are SI throughout: acceleration m/s², time s, frequency Hz, VDV
-m/s^1.75, MSDV m/s^1.5.  The weightings are dimensionless gains, so a weighted
-value keeps the unit of its input: We weights rotational accelerations, rad/s²
-in and rad/s² out (a_w in rad/s², VDV in rad/s^1.75); ISO 2631-1 clause 8.2.3
-rates rotations for comfort only, each axis multiplied by its own factor
-(0.63 m/rad roll, 0.4 m/rad pitch, 0.2 m/rad yaw) to compare with translations.  Problems with the caller's input raise
-:class:`~identification.errors.InputError` naming the argument.
+Units are SI throughout: acceleration m/s², time s, frequency Hz, VDV m/s^1.75, MSDV m/s^1.5.  The
+weightings are dimensionless gains: We weights rotational accelerations, rad/s² in and out (VDV in
+rad/s^1.75); ISO 2631-1 clause 8.2.3 rates rotation for comfort only, each axis times its factor (0.63
+m/rad roll, 0.4 pitch, 0.2 yaw).  Bad input raises :class:`~identification.errors.InputError` naming it.
 """
 
 from __future__ import annotations
@@ -105,10 +100,8 @@ class Weighting:
 
 
 #: The weightings of ISO 2631-1:1997 Table A.1, by name: the principal Wk, Wd, Wf and the additional Wc,
-#: We, Wj (clause 6.4.2 and Table 2: Wc seat-back x-axis; We rotational, rx, ry, rz, in rad/s²; Wj the
-#: vertical vibration under the head of a recumbent person).  Wc and We have the band limits and the
-#: acceleration-velocity transition of Wd with f3 = f4 = 8 Hz and 1 Hz; Wj has no transition (f3 = f4 = ∞)
-#: and an upward step from 3.75 Hz to 5.32 Hz.
+#: We, Wj (Table 2: Wc seat-back x; We rotational rx, ry, rz in rad/s²; Wj vertical under a recumbent
+#: person's head): Wc, We as Wd with f3 = f4 = 8 Hz, 1 Hz; Wj no a-v transition, a step 3.75 -> 5.32 Hz.
 WEIGHTINGS: dict[str, Weighting] = {
     "Wk": Weighting("Wk", "vertical (z), seated or standing", 0.4, 100.0, 12.5, 12.5, 0.63,
                     2.37, 0.91, 3.35, 0.91, band_hz=(0.5, 80.0), k=1.0, exposure_limits=True),

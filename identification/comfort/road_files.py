@@ -1,41 +1,28 @@
-"""Road files: a two-track road profile as CSV or as ASAM OpenCRG.
+"""Road files: a two-track road profile as CSV or as ASAM OpenCRG (format details: docs/guide/ride.md).
 
-**CSV** (:func:`write_road_csv`, :func:`read_road_csv`): UTF-8 text, comment
-lines starting with ``#`` before the header (one may read
-``# track_width_m = 1.8``, the distance between the tracks in m), then the
-header ``x_m,left_m,right_m`` and one row per grid point: the position along
-the road (m, increasing, uniformly spaced) and the heights of the left and
-right tracks (m).  Numbers are written in Python's shortest round-trip form, so
-a written road reads back bit for bit.
+**CSV** (:func:`write_road_csv`, :func:`read_road_csv`): UTF-8 text, ``#`` comment lines first (one may
+read ``# track_width_m = 1.8``, m), the header ``x_m,left_m,right_m``, then per grid point the position
+along the road (m, increasing, uniformly spaced) and the left and right tracks' heights (m), written in
+Python's shortest round-trip form: a written road reads back bit for bit.
 
-**OpenCRG** (:func:`write_road_crg`, :func:`read_road_crg`), the ASAM OpenCRG
-1.2 format of curved regular grids: ISO 8859-1 text of data sections, each
-opened by ``$KEYWORD`` and closed by a line starting with ``$`` (``*`` in the
-first column marks a comment line, ``!`` an inline comment): ``$CT`` a free
-description, ``$ROAD_CRG`` the reference line's ``KEY = value`` parameters
-(``REFERENCE_LINE_INCREMENT`` mandatory: the step in u, m; ``LONG_SECTION_V_*``
-the lateral positions v, m, positive to the left), ``$KD_Definition`` the data
-format (``#:LRFI``/``#:LDFI`` text with 10/20-character real/double fields,
-``#:KRBI``/``#:KDBI`` big-endian IEEE float32/float64 binary; KRBI when absent)
-and the channels, one per column (``D:reference line u,m``, ``D:long section at
-v = X,m`` or ``D:long section N,m``; ``U:`` virtual channels are ignored);
-then a line starting with ``$$$$`` and the data rows, one per lateral cut.  A
-text row takes as many 80-character records as its channels need; binary
-records of 80 bytes are filled one after another and the last is padded with
-NaN.  A text field starting with ``*`` is a missing value.  The writer writes
-LDFI (20-character doubles, 14 significant digits) with the channels u and the
-two tracks at v = -B/2 (right) and +B/2 (left).  The reader takes any of the four
-formats, a straight level reference line (heading channels are ignored; slope
-and banking, which would change the heights, are refused), and the tracks as
-the two long sections, or, with more sections, interpolated at v = ±B/2.
+**OpenCRG** (:func:`write_road_crg`, :func:`read_road_crg`), ASAM OpenCRG 1.2: ISO 8859-1 text sections
+opened by ``$KEYWORD`` and closed by a line starting with ``$`` (``*`` in column 1 a comment line, ``!`` an
+inline comment): ``$CT`` a description, ``$ROAD_CRG`` the reference line's ``KEY = value`` parameters
+(``REFERENCE_LINE_INCREMENT``, the step in u, m, mandatory; ``LONG_SECTION_V_*`` lateral positions v, m,
+positive to the left), ``$KD_Definition`` the data format (``#:LRFI``/``#:LDFI`` text of 10/20-character
+real/double fields, 80-character records, a row starting a record; ``#:KRBI``/``#:KDBI`` big-endian
+float32/float64 in 80-byte records filled one after another, NaN-padded; KRBI when absent) and one ``D:``
+channel per column (``reference line u,m``, ``long section at v = X,m``, ``long section N,m``; ``U:``
+virtual channels ignored); then a ``$$$$`` line and the rows, one per cut across the road (a text field
+starting with ``*`` is missing).  The writer writes LDFI (14 significant digits): u and the tracks at
+v = -B/2 (right) and +B/2 (left).  The reader takes the four formats and a straight, level reference line
+(heading channels ignored; slope and banking, which would change the heights, refused); the tracks are the
+two long sections or, with more, interpolated at v = ±B/2.
 
-Readers follow the package's input rules: the file is read with
-:func:`identification._files.read_input_bytes` (special files refused), every
-problem is an :class:`~identification.errors.InputError` naming the file in one
-line, non-finite values and a non-uniform spacing are refused with their row.
-Positions are counted from the file's first point (the road starts at x = 0).
-A road read from a file has the class :data:`~identification.comfort.road.FILE_CLASS`.
-Writers write atomically (:func:`identification._files.atomic_write_texts`).
+Readers follow the package's input rules (:func:`identification._files.read_input_bytes`: special files
+refused; one-line :class:`~identification.errors.InputError` naming the file; a non-finite value or a
+non-uniform spacing refused with its row).  Positions count from the file's first point; the road's
+class is :data:`~identification.comfort.road.FILE_CLASS`.  Writers write atomically.
 """
 
 from __future__ import annotations
