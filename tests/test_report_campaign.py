@@ -242,3 +242,29 @@ def test_a_batch_of_repeated_runs_gives_one_row_per_tire_and_speed(cli, campaign
                 [float(members[0]["k_ci_low"]), float(members[0]["k_ci_high"])], abs=1.0)
     assert "between-run scatter" in verdict and ONE_RUN in verdict and "within-run only" in verdict
     assert 'href="tables/campaign.csv"' in html
+
+
+def test_the_pooled_answer_is_written_as_a_tire_fmu_that_carries_it(cli, campaign_day, tmp_path):
+    """Each condition of repeated runs gets params/campaign/<name>.json and fmu/campaign/<name>.fmu with the
+    pooled (unrounded) k and c; the FMU validates and simulates the static wheel load in fmpy."""
+    from fmpy import read_model_description, simulate_fmu
+    from fmpy.validation import validate_fmu
+    out = tmp_path / "out"
+    res = cli("report", campaign_day, "-o", out, "--workers", "2")
+    assert res.code == 0, res.err
+    summary = json.loads((out / "summary.json").read_text())
+    rows = {(c["tire"], round(c["speed_m_s"] * 3.6, 6)): c for c in summary["campaign"]}
+    assert rows[("FL", 5.0)]["files"] is None              # one run: its own files are the answer
+    assert sorted(p.name for p in (out / "fmu" / "campaign").iterdir()) == ["FL_10kmh.fmu", "FL_7kmh.fmu"]
+    for speed in (7.0, 10.0):
+        row = rows[("FL", speed)]
+        params = json.loads((out / row["files"]["params"]).read_text())["tires"]["FL"]
+        assert params["k"] == row["k"]["value"] and params["k_ci"] == row["k"]["ci"] and params["runs"] == 3
+        fmu = out / row["files"]["fmu"]
+        assert validate_fmu(str(fmu)) == []
+        starts = {v.name: v.start for v in read_model_description(str(fmu)).modelVariables}
+        assert float(starts["stiffness"]) == pytest.approx(row["k"]["value"], rel=1e-12)
+        assert float(starts["damping"]) == pytest.approx(row["c"]["value"], rel=1e-12)
+        result = simulate_fmu(str(fmu), stop_time=0.5, output=["force_z"])
+        assert result["force_z"][-1] == pytest.approx(row["wheel_load_N"], rel=1e-3)
+        assert f'href="{row["files"]["fmu"]}"' in (out / "report.html").read_text()

@@ -53,7 +53,9 @@ def written_lines(out: Path) -> list[str]:
     if n["fmu"] or n["point_contact"] or n["fmu_not_recommended"]:
         items.append(f"{out / 'fmu'}{os.sep} ({n['fmu']} recommended tire FMUs <recording>_<TIRE>.fmu; "
                      f"{n['point_contact']} point-contact ones of the same k, c in {POINT_CONTACT}{os.sep}; "
-                     f"{n['fmu_not_recommended']} not recommended in {NOT_RECOMMENDED}{os.sep})")
+                     f"{n['fmu_not_recommended']} not recommended in {NOT_RECOMMENDED}{os.sep}"
+                     + (f"; {n['campaign']} of repeated runs' pooled k, c in campaign{os.sep}" if n["campaign"] else "")
+                     + ")")
     if n["params"] or n["params_not_recommended"]:
         items.append(f"{out / 'params'}{os.sep} ({n['params']} recommended parameter files <recording>.json; "
                      f"{n['params_not_recommended']} not recommended in {NOT_RECOMMENDED}{os.sep})")

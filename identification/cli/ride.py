@@ -3,7 +3,8 @@
 The body (rigid or pivoting front axle, dynamic indices) and the sets come
 from a whole-tractor recording (:func:`identification.comfort.ride.parameter_sets`);
 the ride from :func:`identification.comfort.ride.ride`; the rating is
-ISO 2631-1's Wk (vertical) at the seat.
+ISO 2631-1's Wk (vertical) at the seat: on the floor, or with ``--seat PARAMS.json`` on a suspended seat
+(:mod:`identification.comfort.seat`).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import sys
 from ..errors import InputError
 from .._files import json_text
 
-__all__ = ["add_parser", "run", "DEFAULT_COMPARE", "format_expected", "format_contact", "format_axes"]
+__all__ = ["add_parser", "run", "DEFAULT_COMPARE", "format_expected", "format_contact", "format_axes", "format_seat"]
 
 DEFAULT_COMPARE = "paper,final"
 _CLASSES = ("A", "B", "C", "D", "E")
@@ -70,6 +71,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--seat-height-m", type=float, default=None,
                    help="seat height above the axles, m, for the seat's fore-aft (pitch) and lateral (roll) "
                         "acceleration (default 0.9)")
+    p.add_argument("--seat", metavar="PARAMS.json", default=None,
+                   help="rate the occupant on a suspended seat (mass, spring, damper, end stops; see 'cleatfmu seat'): "
+                        "the z axis on the seat with its floor values alongside, the SEAT factor and the end-stop "
+                        "hits; x and y stay floor values (default: floor values, no seat suspension)")
     p.add_argument("--exposure-h", type=float, default=8.0, help="daily exposure time for A(8), h (default 8)")
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="processes of the diagnosis (default: 2 or the CPU count)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
@@ -118,6 +123,10 @@ def _check(args) -> list:
         raise InputError("--seat-height-m", f"-1 .. 5 m above the axles expected, got {args.seat_height_m:g}")
     if args.workers < 1:
         raise InputError("--workers", f"at least 1, got {args.workers}")
+    args.seat_model = None
+    if args.seat is not None:
+        from ..comfort.seat import read_seat
+        args.seat_model = read_seat(args.seat)
     from ..comfort.ride import check_set_names
 
     from .util import recording_name_arg
@@ -156,7 +165,7 @@ def run(args) -> int:
                                 duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
                                 exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp,
                                 realisations=args.realisations, tires=args.tires,
-                                seat_height_m=args.seat_height_m, body_doc=args.body,
+                                seat_height_m=args.seat_height_m, body_doc=args.body, seat=args.seat_model,
                                 road=road if road is not None else {"coherence": args.coherence})
     if road is not None:
         doc["road"]["file"] = str(args.road_file)
@@ -189,6 +198,8 @@ def run(args) -> int:
         print(format_expected(doc))
         print(format_contact(doc))
         print(format_axes(doc))
+        if args.seat_model is not None:
+            print(format_seat(doc, args.seat))
         print(f"seat: {doc['seat']['values']}")
         if args.plot:
             print(f"wrote {args.plot}")
@@ -286,4 +297,24 @@ def format_axes(doc: dict) -> str:
             line += (f"; A(8) {a8:.3f} on axis {entry['three_axes']['exposure']['a8_axis']} "
                      f"({status}, {EU_A8_ACTION_M_S2:g} / {EU_A8_LIMIT_M_S2:g})")
         lines.append(line)
+    return "\n".join(lines)
+
+
+def format_seat(doc: dict, source: str = "") -> str:
+    """The suspended seat of a ``ride --seat`` document as text: the seat, then per set the occupant's and the
+    floor's z a_w, the SEAT factor and the end-stop hits (expected values over the roads)."""
+    seat = doc["seat"]["suspension"]
+    lines = [f"suspended seat{' ' + source if source else ''}: {seat['mass_kg']:g} kg, natural frequency "
+             f"{seat['natural_frequency_hz']:.2f} Hz, damping ratio {seat['damping_ratio']:.2f}, travel "
+             f"+-{seat['travel_m'] * 1e3:g} mm (expected values; z a_w in m/s2)"]
+    iso = doc["seat"]["iso5007"]
+    lines.append(f"on ISO 5007 class {iso['class']} ({iso['tractor_mass']}; the wheel loads give "
+                 f"{iso['tractor_mass_kg']:.0f} kg): SEAT {iso['seat_factor']:.3f} (linear seat "
+                 f"{iso['seat_factor_linear']:.3f}), end-stop hits {iso['end_stops']['hits']}")
+    for name, entry in doc["sets"].items():
+        e = entry["expected"]
+        lines.append(f"{name}: seat {e['a_w']['mean']:.3f}, floor {e['floor_a_w']['mean']:.3f}, SEAT "
+                     f"{e['seat_factor']['mean']:.3f} (linear seat from the road PSD "
+                     f"{e['psd']['seat_factor_linear']:.3f}), end-stop hits {e['end_stop_hits']['mean']:.3g} per "
+                     f"ride ({e['end_stop_share']['mean']:.2%} of the time)")
     return "\n".join(lines)

@@ -96,11 +96,13 @@ class BatchResult:
     out_dir: Path
     seconds: float
     timings: dict                                    # stage -> total s over all jobs
+    campaign: list | None = None                     # the campaign's conditions, with their pooled files
+    errors: list = field(default_factory=list)       # what failed beyond the recordings (the pooled files)
 
     @property
     def failures(self) -> list[str]:
         """One line per failed recording or tire stage."""
-        out = [f"{r.source}: {r.error}" for r in self.recordings if not r.ok]
+        out = [f"{r.source}: {r.error}" for r in self.recordings if not r.ok] + list(self.errors)
         for r in self.recordings:
             for t in r.tires:
                 out += [f"{r.source} {t.tire}: {e}" for e in t.errors]
@@ -392,4 +394,9 @@ def run_batch(paths, out_dir, *, workers: int | None = None, progress: bool = Tr
     for rep in results:
         for stage, sec in rep.timings.items():
             totals[stage] = totals.get(stage, 0.0) + sec
-    return BatchResult(recordings=reports, out_dir=out_dir, seconds=time.perf_counter() - t0, timings=totals)
+    result = BatchResult(recordings=reports, out_dir=out_dir, seconds=time.perf_counter() - t0, timings=totals)
+    from .pooled import write_campaign
+    with _timed(totals, "export"):
+        write_campaign(result)
+    result.seconds = time.perf_counter() - t0
+    return result

@@ -54,7 +54,7 @@ import math
 import numpy as np
 
 __all__ = ["pool_runs", "reml_tau2", "supported_step", "rounded_interval", "condition_names", "group_runs",
-           "campaign_conditions", "batch_runs", "NAME_KEYS", "SPEED_TOLERANCE_KMH", "LOAD_RTOL", "PRESSURE_RTOL",
+           "campaign_conditions", "batch_runs", "result_conditions", "NAME_KEYS", "SPEED_TOLERANCE_KMH", "LOAD_RTOL", "PRESSURE_RTOL",
            "ONE_RUN", "LEVEL"]
 
 #: Sidecar keys that name what was tested: runs naming a different vehicle or tire are never pooled.
@@ -287,6 +287,14 @@ def _note(n: int) -> str:
                 "without test-to-test scatter")
     return (f"{n} runs: random-effects mean (REML between-run variance, Hartung-Knapp-Sidik-Jonkman "
             f"interval, t on {n - 1} degree(s) of freedom): the interval holds the between-run scatter")
+
+
+def result_conditions(result) -> list[dict]:
+    """A batch's campaign conditions: as the batch wrote their pooled files (``result.campaign``), else
+    computed from its runs (``files`` None)."""
+    if getattr(result, "campaign", None) is not None:
+        return result.campaign
+    return [dict(row, files=None) for row in campaign_conditions(batch_runs(result))]
 
 
 def batch_runs(result) -> list[dict]:

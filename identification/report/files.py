@@ -126,7 +126,8 @@ def file_counts(out_dir) -> dict:
     return {"fmu": count(out / "fmu", "*.fmu"), "point_contact": count(out / "fmu" / POINT_CONTACT, "*.fmu"),
             "fmu_not_recommended": count(out / "fmu" / NOT_RECOMMENDED, "*/*.fmu"),
             "params": count(out / "params", "*.json"),
-            "params_not_recommended": count(out / "params" / NOT_RECOMMENDED, "*/*.json")}
+            "params_not_recommended": count(out / "params" / NOT_RECOMMENDED, "*/*.json"),
+            "campaign": count(out / "fmu" / "campaign", "*.fmu")}
 
 
 def remove_staging(out_dir) -> list[Path]:

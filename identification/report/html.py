@@ -24,7 +24,7 @@ from pathlib import Path
 from .. import __version__
 from .._files import atomic_write_texts, json_text
 from .batch import FIGURES_STAGING, BatchResult
-from .campaign import batch_runs, campaign_conditions
+from .campaign import result_conditions
 from ..diagnose.joint_evidence import interval_text
 from .files import not_recommended_params, point_contact_fmu, recommended_fmu, recommended_params
 from .tables import (METHODS_HEADS, TABLE4_HEADS, campaign_table, csv_text, read_truth, ride_table, table4_table,
@@ -334,7 +334,7 @@ def summary_document(result: BatchResult) -> dict:
             "use": "per recording, recommended_fmus (fmu/<recording>_<TIRE>.fmu) carry the recommended k and c; "
                    "'cleatfmu simulate fmu --body summary.json REC.csv' (also ssp, ride --body) takes the "
                    "recording's diagnosis from here",
-            "recordings": recordings, "campaign": campaign_conditions(batch_runs(result)),
+            "recordings": recordings, "campaign": result_conditions(result),
             "failures": result.failures, "seconds": result.seconds,
             "stage_seconds": result.timings}
 

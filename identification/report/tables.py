@@ -161,14 +161,14 @@ def campaign_table(result) -> Table:
     """One row per tire and condition (:mod:`~identification.report.campaign`): the pooled k and c of its
     runs rounded to what their interval supports, the between-run scatter, where the interval comes from
     and whether the runs disagree beyond their fit intervals (Cochran's Q)."""
-    from .campaign import batch_runs, campaign_conditions
+    from .campaign import result_conditions
 
     table = Table("campaign", ["tire", "vehicle", "tire_name", "speed_km_h", "speed_km_h_min", "speed_km_h_max",
                                "wheel_load_N", "inflation_pressure_kPa", "runs", "recordings", "k_N_m", "k_ci_low", "k_ci_high",
                                "k_between_run_sd_N_m", "k_q_p", "k_i2", "c_Ns_m", "c_ci_low", "c_ci_high",
                                "c_between_run_sd_Ns_m", "c_q_p", "c_i2", "runs_disagree", "interval_source",
-                               "note"])
-    for row in campaign_conditions(batch_runs(result)):
+                               "note", "fmu", "params"])
+    for row in result_conditions(result):
         k, c = row["k"], row["c"]
         kr, cr = k["rounded"], c["rounded"]
         table.rows.append([row["tire"], row["names"].get("vehicle"), row["names"].get("tire"),
@@ -177,7 +177,8 @@ def campaign_table(result) -> Table:
                            None if row["inflation_pressure_Pa"] is None else row["inflation_pressure_Pa"] / 1e3,
                            row["runs"], " ".join(row["recordings"]), kr["value"], *kr["ci"], k["between_run_sd"],
                            k["q_p"], k["i2"], cr["value"], *cr["ci"], c["between_run_sd"], c["q_p"], c["i2"],
-                           row["runs_disagree"], row["interval_source"], row["note"]])
+                           row["runs_disagree"], row["interval_source"], row["note"],
+                           *((row["files"] or {}).get(key) for key in ("fmu", "params"))])
         if row["runs"] == 1:
             source = '<span class="warn">one run: no repeatability measured</span> (its fit interval only)'
         else:
@@ -198,13 +199,15 @@ def campaign_table(result) -> Table:
                  f'<td>{_shown(kr["ci"][0], kr["step"], 1e-3)}–{_shown(kr["ci"][1], kr["step"], 1e-3)}</td>',
                  f'<td>{_scatter(k, 1e-3)}</td>', f'<td><b>{_shown(cr["value"], cr["step"], 1e-3)}</b></td>',
                  f'<td>{_shown(cr["ci"][0], cr["step"], 1e-3)}–{_shown(cr["ci"][1], cr["step"], 1e-3)}</td>',
-                 f'<td>{_scatter(c, 1e-3)}</td>', f'<td class="l">{source}</td>']
+                 f'<td>{_scatter(c, 1e-3)}</td>', f'<td class="l">{source}</td>',
+                 '<td class="l">' + (f'<a href="{_e(row["files"]["fmu"])}">FMU</a>, <a href="{_e(row["files"]["params"])}">'
+                                     'params</a>' if row["files"] else "") + '</td>']
         table.html_rows.append(f"<tr>{_labelled(cells, CAMPAIGN_HEADS)}</tr>")
     return table
 
 
 CAMPAIGN_HEADS = ['tire', 'km/h', 'runs', 'K / kN·m⁻¹', 'K 95 %', 'K between-run SD', 'C / kN·s·m⁻¹', 'C 95 %',
-                  'C between-run SD', 'interval from']
+                  'C between-run SD', 'interval from', 'pooled files']
 
 
 def _flipped(r) -> list:

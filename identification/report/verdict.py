@@ -48,18 +48,21 @@ def files_note() -> str:
 def campaign_text(table) -> str:
     """The paragraph above the one-row-per-condition table: the grouping rule, where its intervals come from,
     and which conditions' runs disagree beyond their fit intervals."""
-    from .campaign import LOAD_RTOL, SPEED_TOLERANCE_KMH
+    from .campaign import LOAD_RTOL, PRESSURE_RTOL, SPEED_TOLERANCE_KMH
 
     col = {name: i for i, name in enumerate(table.columns)}
     repeated = [row for row in table.rows if row[col["runs"]] > 1]
     apart = [f'{row[col["tire"]]} at {row[col["speed_km_h"]]:.3g} km/h' for row in repeated
              if row[col["runs_disagree"]]]
     text = (f'<p><b>One answer per tire and condition</b> (same position, speed within {SPEED_TOLERANCE_KMH:g} '
-            f'km/h, wheel load within {100 * LOAD_RTOL:g} %, the same vehicle and tire named in the sidecar). ')
+            f'km/h, wheel load within {100 * LOAD_RTOL:g} %, inflation pressure within {100 * PRESSURE_RTOL:g} %, '
+            'the same vehicle and tire named in the sidecar). ')
     if repeated:
         text += ('Repeated runs are pooled into a random-effects mean: its 95 % interval comes from the '
                  '<b>between-run scatter</b> (REML, Hartung-Knapp-Sidik-Jonkman, t on runs − 1 degrees of '
-                 'freedom), and the values are rounded to the digits it supports. ')
+                 'freedom), and the values are rounded to the digits it supports. The pooled k and c of each '
+                 'condition of repeated runs are written as a parameter file and a point-contact tire FMU '
+                 '(<code>params/campaign/</code>, <code>fmu/campaign/</code>; linked in the table). ')
     if len(repeated) < len(table.rows):
         text += ('A condition of one run keeps its own fit interval: <b>within-run only</b> (sensor noise and '
                  'model error inside that run), <span class="warn">one run: no repeatability measured</span>. ')
