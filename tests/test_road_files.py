@@ -111,6 +111,26 @@ def test_a_hand_written_lrfi_file_is_read_as_the_specification_says(tmp_path):
         read_road_crg(path, track_width_m=1.5)
 
 
+def test_a_hand_written_ldfi_file_wraps_a_row_of_five_channels_over_two_records(tmp_path):
+    """LDFI: 20-character doubles, 4 a record; u and four long sections make 5 channels, each row 2 records
+    (the second holding one value), the tracks the sections at v = -0.9 and +0.9 m of B = 1.8 m."""
+    rows = [(0.0, 1.0, 2.0, 3.0, 4.0), (0.1, -1.5e-3, 2.5e-3, 3.5e-3, -4.5e-3), (0.2, 0.0, 1e-5, -2e-5, 0.0)]
+    data = "".join(f"{r[0]:20.12f}{r[1]:20.12e}{r[2]:20.12e}{r[3]:20.12e}\n{r[4]:20.12e}\n" for r in rows)
+    text = ("$CT\nfive channels\n$\n$ROAD_CRG\nREFERENCE_LINE_INCREMENT = 0.1\n$\n$KD_Definition\n#:LDFI\n"
+            "D:reference line u,m\nD:long section at v = -2.0,m\nD:long section at v = -0.9,m\n"
+            "D:long section at v = 0.9,m\nD:long section at v = 2.0,m\n$\n$$$$\n" + data)
+    path = tmp_path / "five.crg"
+    path.write_text(text, encoding="latin-1")
+    r = read_road_crg(path)
+    assert r.track_width_m == pytest.approx(1.8)
+    np.testing.assert_allclose(r.x_m, [0.0, 0.1, 0.2], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(r.right_m, [2.0, 2.5e-3, 1e-5], rtol=1e-12)
+    np.testing.assert_allclose(r.left_m, [3.0, 3.5e-3, -2e-5], rtol=1e-12)
+    path.write_text(text.rstrip("\n").rsplit("\n", 1)[0] + "\n", encoding="latin-1")     # the last record cut
+    with pytest.raises(InputError, match="do not make whole rows"):
+        read_road_crg(path)
+
+
 def test_a_hand_written_binary_krbi_file_is_read(tmp_path):
     """KRBI: big-endian IEEE float32, records of 80 bytes filled one after another, the last padded with NaN;
     three channels (u, two tracks by position) and 9 cuts: 27 values, 2 records, 13 NaN of padding."""
