@@ -20,8 +20,9 @@ so the expected mean square of a weighted seat acceleration is
 with H_i the seat acceleration per unit road height under tire i (from the model's mass, stiffness and
 damping matrices, :func:`seat_transfer`), the rear tires delayed by the wheelbase, and S_ij the tracks'
 cross-spectra as :mod:`~identification.comfort.road` synthesises them: S(f) = Gd(f / v) / v on each
-track, the coherence γ²(n) = exp(−a n B) between the left and right ones.  This is E[a_w²] over roads
-(a long ride's limit); the Monte-Carlo counterpart is √(mean a_w²) over the realisations.
+track, the coherence γ²(n) of the road's model (uniform exp(−a n B) or by class) between the left and right
+ones.  This is E[a_w²] over roads (a long ride's limit); the Monte-Carlo counterpart is √(mean a_w²) over
+the realisations.
 """
 
 from __future__ import annotations
@@ -143,7 +144,8 @@ def psd_rating(body: Body, k: dict, c: dict, row, *, road, speed_m_s: float, wei
     body, k, c, row
         As for :func:`seat_transfer`.
     road : RoadProfile
-        Gives the class, the band, the track width and the coherence decay (not the heights).
+        Gives the band, the PSD and the tracks' coherence (:meth:`RoadProfile.psd`, :meth:`RoadProfile.coherence`;
+        not the heights).
     speed_m_s : float
     weighting : str
         ISO 2631-1 weighting of the point's axis.
@@ -159,13 +161,12 @@ def psd_rating(body: Body, k: dict, c: dict, row, *, road, speed_m_s: float, wei
         √E[a_w²], m/s².
     """
     from .iso2631 import weighting_response
-    from .road import iso8608_psd, track_coherence
 
     lo, hi = road.band_cpm
     f = np.geomspace(lo * speed_m_s, hi * speed_m_s, int(points))
     n = f / speed_m_s
-    s = iso8608_psd(n, road.road_class, band_cpm=None) / speed_m_s        # m²/Hz on each track
-    gamma = np.sqrt(track_coherence(n, road.track_width_m, decay=road.coherence_decay))
+    s = road.psd(n) / speed_m_s                   # m²/Hz on each track (NaN for a road from a file)
+    gamma = np.sqrt(road.coherence(n))            # the road's coherence model (uniform or by class)
     delay = np.array([0.0 if t in FRONT_TIRES else body.wheelbase_m / speed_m_s for t in body.tires])
     left = np.array([t in LEFT_TIRES for t in body.tires])
     h = seat_transfer(body, k, c, row, f) * np.exp(-2j * math.pi * f[:, None] * delay[None, :])

@@ -202,7 +202,7 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
                     duration_s: float = 60.0, seat_x_m: float | None = None, seat_y: float = 0.0,
                     exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1, ssp_dir=None,
                     realisations: int = 1, tires: str = "linear", seat_height_m: float | None = None,
-                    body_doc=None, seat=None) -> tuple:
+                    body_doc=None, seat=None, road=None) -> tuple:
     """The recording's tractor on ISO 8608 roads with each parameter set: (runs, JSON document).
 
     Combines :func:`parameter_sets`, :func:`identification.comfort.road.road_profile` (grid ROAD_SPACING_M)
@@ -215,20 +215,25 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
     (:func:`identification.comfort.ride_ssp.write_ride_ssps`; ``doc["ssp"]``).  With `seat` (a
     :class:`~identification.comfort.seat.SeatModel`) the occupant rides a suspended seat (:func:`ride`): the
     z ratings are the seat's, each set's ``suspended_seat`` holds the floor's, the SEAT factor and the end
-    stops, with their expected values; the SSP systems hold the floor only.
+    stops, with their expected values; the SSP systems hold the floor only.  `road`: None, or a dict of
+    further :func:`~identification.comfort.road.road_profile` keywords for the generated roads (e.g.
+    ``{"coherence": "class"}``), or a RoadProfile to ride on alone (one ride; `road_class`, `realisations` unused).
     """
     from .contact import contact_summary
     from .expected import expected_set, rating_values, realisation_seeds
-    from .road import road_profile
+    from .road import RoadProfile, road_profile
     from .seat_axes import DEFAULT_SEAT_HEIGHT_M, axis_rows
 
-    seeds = realisation_seeds(seed, realisations)
+    given = road if isinstance(road, RoadProfile) else None        # a road read from a file: one ride on it
+    options = dict(road or {}) if given is None else {}             # further road_profile keywords
+    seeds = realisation_seeds(seed, 1 if given is not None else realisations)
     speed = rec.speed_m_s if speed_m_s is None else float(speed_m_s)
     body, sets, how = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers, body_doc=body_doc,
                                      speed_m_s=speed)
     every = []
     for s in seeds:
-        road_s = road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M, s)
+        road_s = given if given is not None else road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M,
+                                                              s, **options)
         every.append(ride(body, sets, road=road_s, speed_m_s=speed, duration_s=duration_s, seat_x_m=seat_x_m,
                           seat_y=seat_y, exposure_h=exposure_h, tires=tires,
                           seat_height_m=seat_height_m, seat=seat))
@@ -241,7 +246,7 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
     doc = {"recording": rec.source,
            "road": {"class": road.road_class, "seed": int(seed), "realisations": len(seeds),
                     "length_m": float(road.x_m[-1]), "track_width_m": road.track_width_m,
-                    "coherence_decay": road.coherence_decay},
+                    "coherence_decay": road.coherence_decay, "coherence": road.coherence_model},
            "speed_m_s": speed, "duration_s": float(duration_s), "tires": tires,
            "seat": {"x_m": seat_x, "y": float(seat_y), "height_m": height,
                     "values": FLOOR_VALUES if seat is None else SEAT_VALUES,
