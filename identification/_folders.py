@@ -31,7 +31,7 @@ import tempfile
 import threading
 from pathlib import Path
 
-from ._files import make_folders, on_outcome
+from ._files import STAGING_FOLDERS, make_folders, on_outcome
 from .errors import InputError
 
 __all__ = ["FolderSet", "sibling", "WRITE_ERRNOS", "raise_write_error"]
@@ -300,6 +300,7 @@ class FolderSet:
 
     # ------------------------------------------------------------------ temporary files
     def _redirect_tmp(self) -> None:
+        STAGING_FOLDERS.add(Path(os.path.abspath(self.staging)))
         tmp = self.staging / _TMP
         tmp.mkdir()
         self._saved_tmp = (tempfile.tempdir, os.environ.get("TMPDIR"))
@@ -307,6 +308,7 @@ class FolderSet:
         os.environ["TMPDIR"] = str(tmp)
 
     def _restore_tmp(self) -> None:
+        STAGING_FOLDERS.discard(Path(os.path.abspath(self.staging)))
         if self._saved_tmp is None:
             return
         tempfile.tempdir, env = self._saved_tmp

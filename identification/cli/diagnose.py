@@ -171,9 +171,7 @@ def _diagnose_into(args, rec, tire, long: bool, keep_fmus: bool, new_dir) -> tup
         if args.fmu is not None:
             own = next(p for p in gain.fmu_paths if p.stem.endswith(f"_{tire}"))
             files[Path(args.fmu)] = own.read_bytes()
-        if new_dir is not None:      # the new set's links to the earlier FMUs go: the earlier set keeps them
-            for p in gain.fmu_paths:
-                (Path(new_dir) / p.name).unlink(missing_ok=True)
+        if new_dir is not None:
             files.update({Path(new_dir) / p.name: p.read_bytes() for p in gain.fmu_paths})
     if args.plot is not None:
         from ..report.plots import plot_tractor_diagnosis, png_bytes

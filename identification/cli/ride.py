@@ -9,9 +9,11 @@ ISO 2631-1's Wk (vertical) at the seat: on the floor, or with ``--seat PARAMS.js
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import sys
+from pathlib import Path
 
 from ..errors import InputError
 from .._files import json_text
@@ -146,8 +148,8 @@ def run(args) -> int:
             raise InputError(args.save_road, "the road file name must end with .csv or .crg")
         check_output(args.save_road, args.save_road[-4:].lower(), "road")
     if args.ssp is not None:
-        from .util import make_folders
-        make_folders(args.ssp)
+        from .util import check_folder
+        check_folder(args.ssp)
     rec = _recording_arg(args)
     from ..comfort.ride import ride_comparison
 
@@ -160,13 +162,20 @@ def run(args) -> int:
                                          f"{args.duration_s:g} s); shorten --duration-s")
     from .util import announce_compilation
     announce_compilation()
-    runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
-                                speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
-                                duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
-                                exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp,
-                                realisations=args.realisations, tires=args.tires,
-                                seat_height_m=args.seat_height_m, body_doc=args.body, seat=args.seat_model,
-                                road=road if road is not None else {"coherence": args.coherence})
+    with contextlib.ExitStack() as stack:
+        ssp_dir = None      # --ssp DIR as one set: the earlier systems or the new ones, its other files kept
+        if args.ssp is not None:
+            from .._folders import FolderSet
+            ssp_dir = stack.enter_context(FolderSet(args.ssp, keep_existing=True))
+        runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
+                                    speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
+                                    duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
+                                    exposure_h=args.exposure_h, workers=args.workers, ssp_dir=ssp_dir,
+                                    realisations=args.realisations, tires=args.tires,
+                                    seat_height_m=args.seat_height_m, body_doc=args.body, seat=args.seat_model,
+                                    road=road if road is not None else {"coherence": args.coherence})
+        if ssp_dir is not None:
+            doc["ssp"] = {name: str(Path(args.ssp) / Path(p).name) for name, p in doc["ssp"].items()}
     if road is not None:
         doc["road"]["file"] = str(args.road_file)
     if args.save_road is not None:

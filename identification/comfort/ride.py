@@ -262,6 +262,12 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
         doc["sets"][name]["expected"]["contact"] = contact_summary([e[name].contact for e in every], body.tires)
         if name.startswith("map="):      # the map's values at the speed, with their bands and extrapolation
             doc["sets"][name]["map"] = map_set(name[4:], speed, body.tires)[2]
+    if "final" in sets and len(every) > 1:    # paired on the same roads: the road-to-road scatter cancels
+        from .expected import summarise
+        for name in sets:
+            if name != "final":
+                doc["sets"][name]["expected"]["a_w_ratio_to_final"] = summarise(
+                    [e[name].comfort.a_w / e["final"].comfort.a_w for e in every])
     if ssp_dir is not None:
         from .ride_ssp import write_ride_ssps
         paths = write_ride_ssps(ssp_dir, body, sets, road=road, speed_m_s=speed, duration_s=duration_s,
