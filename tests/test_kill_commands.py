@@ -20,39 +20,10 @@ from pathlib import Path
 import pytest
 
 from identification.rig import run_rig, write_run
-from test_kill_output import SEED, _group, _start, times
+from test_kill_output import SEED, _start, check_beside, check_exit, stop_run, times
 from test_output_set import tree
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
-
-ANSWERED = {signal.SIGINT: (130, "cleatfmu: interrupted"), signal.SIGTERM: (143, "cleatfmu: terminated")}
-
-
-def _stop(proc, sig, where: str) -> tuple[str, str]:
-    if sig == signal.SIGINT:
-        os.killpg(proc.pid, sig)                   # Ctrl-C reaches the whole foreground group
-    else:
-        proc.send_signal(sig)
-    try:
-        stdout, stderr = proc.communicate(timeout=60)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        pytest.fail(f"{where}: the run did not stop within 60 s")
-    deadline = time.monotonic() + 5.0
-    while _group(proc.pid) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert _group(proc.pid) == [], f"{where}: processes outlived the run"
-    return stdout, stderr
-
-
-def _check_exit(where: str, sig, code: int, stderr: str) -> None:
-    if sig in ANSWERED and code == ANSWERED[sig][0]:
-        assert stderr.strip().splitlines()[-1:] == [ANSWERED[sig][1]] and "Traceback" not in stderr, (where, stderr)
-    elif sig == signal.SIGKILL:
-        assert code in (0, -signal.SIGKILL), (where, code, stderr)
-    elif code != 0:    # the signal came in the interpreter's own start-up or shutdown, outside the program
-        assert code == -sig and "identification" not in stderr, (where, code, stderr)
-
 
 def kill_over(command: list, out: Path, whole_s: float, n: int, tmpdir: Path, is_new) -> dict:
     """Run `command` (which rewrites the files of folder `out`) n times per signal, each stopped at a random
@@ -67,26 +38,19 @@ def kill_over(command: list, out: Path, whole_s: float, n: int, tmpdir: Path, is
         where = f"{command[0]}: {sig.name} at {after_s:.2f} s (CLEATFMU_KILL_SEED={SEED})"
         proc = _start(command, tmpdir)
         time.sleep(after_s)
-        stdout, stderr = _stop(proc, sig, where)
+        stdout, stderr = stop_run(proc, sig, where)
         code = proc.returncode
         now = tree(out)
         if now != before:           # never a mix: the complete new set, the earlier one put back for the next
             assert set(now) == set(before), (where, sorted(now))
             assert is_new(out), (where, code, stderr[-400:])
-            assert code == 0 or sig == signal.SIGKILL or "Traceback" not in stderr, (where, code, stderr[-400:])
             outcome = "new"
             for name in before:
                 (out / name).write_bytes(_saved[out][name])
         else:
             outcome = "earlier"
-        _check_exit(where, sig, code, stderr)
-        # a SIGKILLed run leaves its new set and lock beside the folder, which the next run that gets to its
-        # output clears (one stopped in its first fraction of a second leaves them to the one after); nothing else
-        if sig == signal.SIGKILL:
-            killed |= {f"{out.name}.cleatfmu-lock", f"{out.name}.cleatfmu-new-{proc.pid}"}
-        leftovers = {p.name for p in out.parent.iterdir() if p != out}
-        assert leftovers <= killed, (where, sorted(leftovers), code, stdout[-300:], stderr[-1500:])
-        killed &= leftovers
+        check_exit(where, sig, code, stderr)
+        killed = check_beside(out, sig, proc, killed, (where, code, stdout[-300:], stderr[-1500:]))
         assert list(tmpdir.iterdir()) == [], (where, sorted(p.name for p in tmpdir.iterdir()))
         outcomes[(outcome, code)] = outcomes.get((outcome, code), 0) + 1
     # the next run clears what the last SIGKILL left, and ends with the new files

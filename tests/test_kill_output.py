@@ -70,6 +70,51 @@ def _complete_new_set(out: Path, stems: set) -> None:
                and p.name not in ("report.html", "summary.json"))
 
 
+#: How a run answers SIGINT and SIGTERM: exit status and the last line on stderr.
+ANSWERED = {signal.SIGINT: (130, "cleatfmu: interrupted"), signal.SIGTERM: (143, "cleatfmu: terminated")}
+
+
+def stop_run(proc, sig, where: str) -> tuple[str, str]:
+    """Send `sig` (SIGINT to the whole group, as Ctrl-C does), wait for the run and check that none of its
+    processes outlives it; its stdout and stderr."""
+    if sig == signal.SIGINT:
+        os.killpg(proc.pid, sig)               # Ctrl-C reaches the whole foreground group
+    else:
+        proc.send_signal(sig)
+    try:
+        stdout, stderr = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        pytest.fail(f"{where}: the run did not stop within 60 s")
+    deadline = time.monotonic() + 5.0
+    while _group(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert _group(proc.pid) == [], f"{where}: processes outlived the run"
+    return stdout, stderr
+
+
+def check_exit(where: str, sig, code: int, stderr: str) -> None:
+    """130/143 with one line and no traceback, SIGKILL's own status, or the interpreter's (a signal in its
+    start-up or shutdown, outside the program)."""
+    if sig in ANSWERED and code == ANSWERED[sig][0]:
+        assert stderr.strip().splitlines()[-1:] == [ANSWERED[sig][1]] and "Traceback" not in stderr, (where, stderr)
+    elif sig == signal.SIGKILL:
+        assert code in (0, -signal.SIGKILL), (where, code, stderr)
+    elif code != 0:
+        assert code == -sig and "identification" not in stderr, (where, code, stderr)
+
+
+def check_beside(out: Path, sig, proc, killed: set, details) -> set:
+    """Nothing beside `out` but what SIGKILLed runs left (their new set and the lock), which the next run that
+    gets to its output clears (one stopped in its first fraction of a second leaves them to the one after);
+    returns what is still left of them."""
+    if sig == signal.SIGKILL:
+        killed = killed | {f"{out.name}.cleatfmu-lock", f"{out.name}.cleatfmu-new-{proc.pid}"}
+    left = {p.name for p in out.parent.iterdir()} - {out.name}
+    assert left <= killed, (sorted(left), details)
+    return killed & left
+
+
 def kill_at_random_times(command: list, out: Path, earlier: Path, stems: set, window_s: float, n: int,
                          tmp_path: Path) -> dict:
     """Start `command` over a copy of `earlier` in `out` n times per signal, each stopped at a random time in
@@ -86,21 +131,8 @@ def kill_at_random_times(command: list, out: Path, earlier: Path, stems: set, wi
         where = f"{sig.name} at {after_s:.2f} s (CLEATFMU_KILL_SEED={SEED})"
         proc = _start(command, tmpdir)
         time.sleep(after_s)
-        if sig == signal.SIGINT:
-            os.killpg(proc.pid, sig)               # Ctrl-C reaches the whole foreground group
-        else:
-            proc.send_signal(sig)
-        try:
-            stdout, stderr = proc.communicate(timeout=60)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            pytest.fail(f"{where}: the run did not stop within 60 s")
-        deadline = time.monotonic() + 5.0
-        while _group(proc.pid) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert _group(proc.pid) == [], f"{where}: processes outlived the run"
+        stdout, stderr = stop_run(proc, sig, where)
         code = proc.returncode
-        answered = {signal.SIGINT: (130, "cleatfmu: interrupted"), signal.SIGTERM: (143, "cleatfmu: terminated")}
         # the earlier set, or the complete new one where the run got that far: it ended (0), its result reached
         # stdout before the signal (then answered, or the interpreter's own shutdown ended it), or SIGKILL
         # came after its swap (the old set's deletion left to the next run)
@@ -113,19 +145,8 @@ def kill_at_random_times(command: list, out: Path, earlier: Path, stems: set, wi
             _complete_new_set(out, stems)
             shutil.rmtree(out)
             shutil.copytree(earlier, out, symlinks=True)
-        if sig in answered and code == answered[sig][0]:
-            assert stderr.strip().splitlines()[-1:] == [answered[sig][1]] and "Traceback" not in stderr, (where, stderr)
-        elif sig == signal.SIGKILL:
-            assert code in (0, -signal.SIGKILL), (where, code, stderr)
-        elif code != 0:    # the signal came in the interpreter's own start-up or shutdown, outside the program
-            assert code == -sig and "identification" not in stderr, (where, code, stderr)
-        # a SIGKILLed run leaves its new set and lock, which the next run that gets to its output clears (one
-        # stopped before that, in its first fraction of a second, leaves them to the one after); nothing else
-        if sig == signal.SIGKILL:
-            killed |= {f"{out.name}.cleatfmu-lock", f"{out.name}.cleatfmu-new-{proc.pid}"}
-        left = {p.name for p in out.parent.iterdir()} - {out.name}
-        assert left <= killed, (where, sorted(left), code, stdout[-300:], stderr[-1500:])
-        killed &= left
+        check_exit(where, sig, code, stderr)
+        killed = check_beside(out, sig, proc, killed, (where, code, stdout[-300:], stderr[-1500:]))
         assert list(tmpdir.iterdir()) == [], (where, sorted(p.name for p in tmpdir.iterdir()))
         outcomes[code] = outcomes.get(code, 0) + 1
     # what the last SIGKILL left goes with the next run on the folder (here one that finds nothing to read)
