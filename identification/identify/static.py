@@ -42,6 +42,9 @@ DEFAULT_SEGMENTS = 5
 #: Fewest points of a loading branch (and of each local-slope interval).
 MIN_POINTS = 3
 
+#: Largest deformation (m) and force (N) a compression test's cell may hold: beyond any tire, far within the fit's
+#: floating-point range.
+_BOUND_M, _BOUND_N = 100.0, 1e9
 #: Accepted column names (lower case) and their factor to SI.
 _DEFORMATION = {"deformation_m": 1.0, "deformation_mm": 1e-3}
 _FORCE = {"force_n": 1.0, "force_kn": 1e3}
@@ -205,7 +208,7 @@ def read_compression(path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         cells = line.split(sep)
         if len(cells) != len(header):
             raise InputError(path, f"line {lineno}: expected {len(header)} cells, found {len(cells)}")
-        for out, i in ((deformation, i_d), (force, i_f)):
+        for out, i, scale, bound in ((deformation, i_d, s_d, _BOUND_M), (force, i_f, s_f, _BOUND_N)):
             try:
                 value = parse_number(cells[i])
             except ValueError:
@@ -213,6 +216,9 @@ def read_compression(path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                     from None
             if not math.isfinite(value):
                 raise InputError(path, f"line {lineno}, column {header[i]}: non-finite value {cells[i].strip()}")
+            if abs(value * scale) > bound:      # (its square would overflow the fit)
+                raise InputError(path, f"line {lineno}, column {header[i]}: {cells[i].strip()} is beyond any "
+                                       f"compression test (|deformation| <= {_BOUND_M:g} m, |force| <= {_BOUND_N:g} N)")
             out[r] = value
     return deformation * s_d, force * s_f, np.array([n for n, _ in rows], dtype=int)
 
