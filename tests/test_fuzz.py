@@ -49,7 +49,8 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-__all__ = ["FuzzFailure", "Case", "Special", "scaled", "CASES", "recording_cases", "sidecar_cases", "identify_option_cases",
+__all__ = ["FuzzFailure", "Case", "Special", "scaled", "CASES",
+           "recording_cases", "sidecar_cases", "identify_option_cases",
            "params_cases", "export_option_cases", "diagnose_cases", "simulate_cases", "rig_cases", "ALL_STRATEGIES",
            "check_case"]
 

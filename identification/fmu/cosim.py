@@ -111,7 +111,9 @@ class TireFmu:
                 self.slave = None
             shutil.rmtree(self._dir, ignore_errors=True)
             if isinstance(exc, Exception) and not isinstance(exc, InputError):
-                why = exc.__class__.__name__ + (f": {exc.strerror}" if isinstance(exc, OSError) and exc.strerror else "")
+                why = exc.__class__.__name__
+                if isinstance(exc, OSError) and exc.strerror:      # e.g. a full disk while extracting it
+                    why += f": {exc.strerror}"
                 raise InputError(path, f"cannot instantiate the FMU here ({why})") from None
             raise
         self._initialized = False

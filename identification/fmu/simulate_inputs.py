@@ -60,7 +60,7 @@ def tractor_fmu_paths(paths, *, recording: str | None = None) -> dict:
                              + "; ".join(problems))
         return {t: folder / found[t][0] for t in TIRES}
     if len(paths) != len(TIRES):
-        raise InputError(None, f"give one tire FMU, four (FL FR RL RR) or one directory holding them, "
+        raise InputError(paths[0], f"give one tire FMU, four (FL FR RL RR) or one directory holding them, "
                                f"got {len(paths)} path(s)")
     tags = [_tire_suffix(p) for p in paths]
     if sorted(t for t in tags if t) == sorted(TIRES):
