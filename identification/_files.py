@@ -270,12 +270,24 @@ def _unlink_quietly(path) -> None:
         pass
 
 
+#: The new sets being written (:class:`identification._folders.FolderSet` registers its staging folder): a
+#: file published inside one needs no backup, the set is swapped in or dropped whole.
+STAGING_FOLDERS: set = set()
+
+
+def _in_staging(path: Path) -> bool:
+    return any(folder == path or folder in path.parents for folder in STAGING_FOLDERS)
+
+
 def publish_path(finished, path) -> None:
     """Put the finished file `finished` (a temporary name in `path`'s folder) in place as `path`
     (``os.replace``).  Inside an :class:`OutputFolders` block the file is recorded, and an older `path` is
     kept as a hidden hard link (or copy) beside it until the block ends, so that a failed block can put it
-    back."""
+    back; not inside a new set being written (:data:`STAGING_FOLDERS`), which goes whole."""
     path = Path(path)
+    if _in_staging(Path(os.path.abspath(path))):
+        os.replace(finished, path)
+        return
     blocks = _blocks()
     backup = None
     if blocks and path.is_file():

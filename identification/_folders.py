@@ -31,7 +31,7 @@ import tempfile
 import threading
 from pathlib import Path
 
-from ._files import make_folders, on_outcome
+from ._files import STAGING_FOLDERS, make_folders, on_outcome
 from .errors import InputError
 
 __all__ = ["FolderSet", "sibling", "WRITE_ERRNOS", "raise_write_error"]
@@ -138,6 +138,13 @@ def _signals_deferred():
                 os.kill(os.getpid(), got[0])
 
 
+def _link_or_copy(src, dst) -> None:
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copy2(src, dst)
+
+
 def _remove(path: Path) -> None:
     if path.is_dir() and not path.is_symlink():
         shutil.rmtree(path, ignore_errors=True)
@@ -158,6 +165,12 @@ class FolderSet:
     replaceable : callable, optional
         ``replaceable(folder)``: None when the existing `target` may be replaced whole, else why not (one
         line, e.g. it holds a file the run does not write): refused, nothing changed.
+    keep_existing : bool
+        The new set starts as the existing folder's contents (hard links where the file system allows,
+        else copies), so that the run adds and replaces files and keeps the others (``diagnose --fmu-dir``
+        into a folder of other recordings' FMUs).  The run must replace a file (write a new one and rename
+        it over, as :func:`identification._files.atomic_write_bytes` does), never write into it: a hard
+        link shares the previous set's data.
 
     Notes
     -----
@@ -174,8 +187,9 @@ class FolderSet:
         full disk: :data:`WRITE_ERRNOS`); the previous set stays as it was.
     """
 
-    def __init__(self, target, *, replaceable=None):
+    def __init__(self, target, *, replaceable=None, keep_existing: bool = False):
         self.shown = Path(target)
+        self.keep_existing = keep_existing
         self.target = Path(os.path.realpath(target))
         self.replaceable = replaceable
         self.staging = sibling(self.target, "new", os.getpid())
@@ -197,8 +211,11 @@ class FolderSet:
             why = self.replaceable(self.target) if self.replaceable and self.target.is_dir() else None
             if why:
                 raise InputError(self.shown, why)
-            os.mkdir(self.staging)
-            self._made = True
+            self._made = True                     # (a copy that fails half-way is removed with it)
+            if self.keep_existing and self.target.is_dir():
+                shutil.copytree(self.target, self.staging, symlinks=True, copy_function=_link_or_copy)
+            else:
+                os.mkdir(self.staging)
             self._redirect_tmp()
         except BaseException as exc:
             self._abandon()
@@ -283,6 +300,7 @@ class FolderSet:
 
     # ------------------------------------------------------------------ temporary files
     def _redirect_tmp(self) -> None:
+        STAGING_FOLDERS.add(Path(os.path.abspath(self.staging)))
         tmp = self.staging / _TMP
         tmp.mkdir()
         self._saved_tmp = (tempfile.tempdir, os.environ.get("TMPDIR"))
@@ -290,6 +308,7 @@ class FolderSet:
         os.environ["TMPDIR"] = str(tmp)
 
     def _restore_tmp(self) -> None:
+        STAGING_FOLDERS.discard(Path(os.path.abspath(self.staging)))
         if self._saved_tmp is None:
             return
         tempfile.tempdir, env = self._saved_tmp

@@ -289,3 +289,29 @@ def test_a_full_disk_ends_in_one_line_and_keeps_the_previous_set(one, tmp_path, 
     finally:
         if mounted:
             subprocess.run(["umount", str(disk)], check=True)
+
+
+def test_a_set_that_keeps_the_folders_other_files_swaps_in_whole_or_not_at_all(tmp_path):
+    """``FolderSet(keep_existing=True)`` (diagnose --fmu-dir, ride --ssp): the new set starts as the folder's
+    files (hard links), the run replaces some; a failed run leaves the folder byte for byte, a finished one
+    has the new files and every other one, and the earlier set's data never changes under a reader."""
+    from identification._folders import FolderSet
+    from identification._files import atomic_write_bytes
+
+    out = tmp_path / "fmus"
+    before = plant(out, {"other_FL.fmu": b"other recording", "rec_FL.fmu": b"earlier", "sub/keep.txt": b"x"})
+    with pytest.raises(RuntimeError):
+        with FolderSet(out, keep_existing=True) as new:
+            atomic_write_bytes({new / "rec_FL.fmu": b"later", new / "rec_FR.fmu": b"later FR"})
+            assert (out / "rec_FL.fmu").read_bytes() == b"earlier"     # the earlier set is untouched meanwhile
+            raise RuntimeError("the run fails")
+    assert tree(out) == before and beside(out) == ["fmus"]
+    with FolderSet(out, keep_existing=True) as new:
+        atomic_write_bytes({new / "rec_FL.fmu": b"later", new / "rec_FR.fmu": b"later FR"})
+    assert {k: v for k, v in tree(out).items()} == {**before, "rec_FL.fmu": tree_digest(b"later"),
+                                                    "rec_FR.fmu": tree_digest(b"later FR")}
+    assert beside(out) == ["fmus"] and not list(out.glob(".*"))
+
+
+def tree_digest(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()

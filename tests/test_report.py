@@ -169,6 +169,15 @@ def test_demo_recommends_one_joint_k_c_per_tire_within_the_truth(demo):
         # the page quotes the expected a_w with its interval, not one road's ride
         e = ride["sets"]["final"]["expected"]["a_w"]
         assert f'<td>{e["mean"]:.3f}</td><td>{e["mean_interval"][0]:.3f}–{e["mean_interval"][1]:.3f}</td>' in html
+        # paired on the same roads, the paper's set against the final one: the ratio's interval is far narrower
+        # than the two sets' own intervals, and it holds the ratio the model's frequency response gives on the
+        # road PSD (to 1 %: a ratio of expected RMS values, not the expected ratio)
+        paired = ride["sets"]["paper"]["expected"]["a_w_ratio_to_final"]
+        lo, hi = paired["mean_interval"]
+        psd = ride["sets"]["paper"]["expected"]["psd"]["a_w"] / ride["sets"]["final"]["expected"]["psd"]["a_w"]
+        assert lo - 0.01 < psd < hi + 0.01, (lo, psd, hi)
+        assert hi - lo < 0.5 * (e["mean_interval"][1] - e["mean_interval"][0]) / e["mean"]
+        assert f'paper {100 * (paired["mean"] - 1):+.1f} %' in html
         # the compression test's static stiffness is below the dynamic one by the paper's 100-170 kN/m (section 4)
         static_k = ride["sets"]["static"]["k"]["FL"]
         assert 100e3 <= truth["tires"]["FL"]["k"] - static_k <= 170e3

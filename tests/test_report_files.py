@@ -140,6 +140,6 @@ def test_the_verdict_keeps_every_column_at_390_px_in_headless_chromium(demo, tmp
         probe.unlink()
     found = re.search(r"<title>N(\d+)B(\d+)W(\d+)</title>", dom)
     assert found, dom[:300]
-    # the per-recording table's 8 rows of 13 cells and the one-row-per-condition table's 8 rows of 10
-    assert (int(found.group(1)), int(found.group(2)), int(found.group(3))) == (8 * 13 + 8 * 10, 0, 390), \
+    # the per-recording table's 8 rows of 13 cells and the one-row-per-condition table's 8 rows of 11
+    assert (int(found.group(1)), int(found.group(2)), int(found.group(3))) == (8 * 13 + 8 * 11, 0, 390), \
         found.group(0)

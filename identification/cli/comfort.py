@@ -3,8 +3,8 @@
 The record is a CSV file with a header: the first column is time in s
 (strictly increasing, uniformly sampled: every step within 1 % of the nominal
 step, at least 1 s), every other column an acceleration in m/s² (a
-``cleat-recording/1`` CSV qualifies).  Each column is weighted (Wk, Wd or Wf)
-and evaluated by :func:`identification.comfort.iso2631.comfort`; for Wk and Wd
+``cleat-recording/1`` CSV qualifies).  Each column is weighted (Wk, Wd, Wf, or
+the additional Wc, We, Wj) and evaluated by :func:`identification.comfort.iso2631.comfort`; for Wk and Wd
 the daily exposure (8 h unless ``--exposure-h``) is compared with the
 whole-body values of EU directive 2002/44/EC.
 """
@@ -25,7 +25,9 @@ __all__ = ["add_parser", "run", "read_acceleration_csv", "DEFAULT_EXPOSURE_H"]
 DEFAULT_EXPOSURE_H = 8.0
 #: Shortest accepted record, s (the running RMS's integration time).
 MIN_DURATION_S = 1.0
-_WEIGHTINGS = ("Wk", "Wd", "Wf")
+_WEIGHTINGS = ("Wk", "Wd", "Wf", "Wc", "We", "Wj")
+#: What a weighting without daily-exposure values rates (its error message).
+_NO_EXPOSURE = {"Wf": "motion sickness", "Wc": "seat-back", "We": "rotational vibration", "Wj": "recumbent, head"}
 
 
 def add_parser(subparsers) -> None:
@@ -39,7 +41,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("acc", metavar="ACC.csv",
                    help="CSV with a header; first column time in s (uniformly sampled), then accelerations in m/s²")
     p.add_argument("--weighting", choices=_WEIGHTINGS, default="Wk",
-                   help="Wk vertical, Wd horizontal (x, y), Wf motion sickness (default: %(default)s)")
+                   help="Wk vertical, Wd horizontal (x, y), Wf motion sickness; Wc seat-back fore-aft (x), We "
+                        "rotational (the columns in rad/s², a_w in rad/s²), Wj vertical under the head, recumbent "
+                        "(default: %(default)s)")
     p.add_argument("--column", metavar="NAME", help="evaluate only this column (default: every acceleration column)")
     p.add_argument("--exposure-h", metavar="H",
                    help=f"daily exposure time, h (0 < H <= 24), for A(8) and the daily VDV (default: "
@@ -61,9 +65,10 @@ def add_parser(subparsers) -> None:
 
 def _exposure_h(text: str | None, weighting: str) -> float | None:
     if text is None:
-        return None if weighting == "Wf" else DEFAULT_EXPOSURE_H
-    if weighting == "Wf":
-        raise InputError("--exposure-h", "Wf (motion sickness) has no daily-exposure values; use Wk or Wd")
+        return None if weighting in _NO_EXPOSURE else DEFAULT_EXPOSURE_H
+    if weighting in _NO_EXPOSURE:
+        raise InputError("--exposure-h", f"{weighting} ({_NO_EXPOSURE[weighting]}) has no daily-exposure values; "
+                                         f"use Wk or Wd")
     try:
         value = float(text)
     except ValueError:
@@ -159,7 +164,8 @@ def format_table(path, weighting, results: dict, bands: dict | None = None) -> s
              f"{first.duration_s:.4g} s"]
     exposure = first.exposure
     head = f"{'column':<{width}}{'a_w':>9}{'MTVV':>9}{'VDV':>10}{'crest':>7}"
-    units = f"{'':<{width}}{'m/s²':>9}{'m/s²':>9}{'m/s^1.75':>10}{'':>7}"
+    unit = weighting.unit                                   # rad/s² for the rotational We
+    units = f"{'':<{width}}{unit:>9}{unit:>9}{unit.replace('/s²', '/s^1.75'):>10}{'':>7}"
     if exposure is not None:
         head += f"{'A(8)':>9}{'daily VDV':>11}"
         units += f"{'m/s²':>9}{'m/s^1.75':>11}"
@@ -191,7 +197,7 @@ def format_table(path, weighting, results: dict, bands: dict | None = None) -> s
                          f"judge it by MTVV and VDV as well")
     if bands:
         shown = {name: b for name, b in bands.items() if b is not None}
-        lines.append("one-third-octave bands of the weighted acceleration: RMS m/s² (level dB re 1e-6 m/s²)")
+        lines.append(f"one-third-octave bands of the weighted acceleration: RMS {unit} (level dB re 1e-6 {unit})")
         for name in (n for n, b in bands.items() if b is None):
             lines.append(f"  {name}: none (the record is too short or sampled too slowly for the bands)")
         if shown:
@@ -285,7 +291,7 @@ def run(args) -> int:
 
         save_png(plot_third_octave(bands, title=f"{Path(args.acc).name}: {weighting.name}"), args.plot)
     if args.json:
-        docs = {name: {**r.to_json(), "mtvv_window_s": tau,
+        docs = {name: {**r.to_json(), "unit": weighting.unit, "mtvv_window_s": tau,
                        "third_octave": None if bands[name] is None else bands[name].to_json()}
                 for name, r in results.items()}
         if len(names) == 1:

@@ -29,12 +29,13 @@ __all__ = ["main", "build_parser", "EXIT_CLOSED_PIPE", "EXIT_TERMINATED", "Termi
 #: registers the command with ``set_defaults(func=...)``; ``func(args)``
 #: returns the exit status and raises InputError for user errors.
 _COMMAND_MODULES: list[str] = [".identify", ".rig", ".export", ".simulate", ".diagnose", ".report", ".comfort", ".ride",
-                               ".static", ".ssp", ".map"]
+                               ".static", ".ssp", ".map", ".seat"]
 #: The module of each command: a command line naming one of these loads only its module (the others may
 #: import scipy, numba or matplotlib, seconds of start-up an ``export`` does not need).
 _COMMAND_MODULE_OF: dict[str, str] = {"identify": ".identify", "rig": ".rig", "export": ".export", "simulate": ".simulate",
                                       "diagnose": ".diagnose", "demo": ".report", "report": ".report",
-                                      "comfort": ".comfort", "ride": ".ride", "static": ".static", "ssp": ".ssp", "map": ".map"}
+                                      "comfort": ".comfort", "ride": ".ride", "static": ".static", "ssp": ".ssp", "map": ".map",
+                                      "seat": ".seat"}
 
 
 #: The recording of a command (positional REC.csv or ``--example``); kept under this name for the commands

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import time
@@ -107,11 +108,10 @@ def _tractor_text(diag, gain, verbose: bool = False) -> str:
 def run(args) -> int:
     """Run ``cleatfmu diagnose``; returns 0 (user errors raise InputError).
 
-    Every output file (``--fmu``, ``--fmu-dir``, ``--plot``) is written at the end, all together or none.
+    Every output file (``--fmu``, ``--fmu-dir``, ``--plot``) is written at the end, all together or none;
+    ``--fmu-dir`` as one set (:class:`identification._folders.FolderSet`, its other files kept): the folder
+    holds the earlier FMUs or the new ones, a killed run's temporary files go beside it, not to $TMPDIR.
     """
-    import tempfile
-    from pathlib import Path
-
     from ..recording.plausibility import check_option
 
     check_option("--workers", args.workers)
@@ -130,26 +130,13 @@ def run(args) -> int:
     long = long or rec.decimated_from_hz is not None
     keep_fmus = args.fmu is not None or args.fmu_dir is not None
     announce_compilation()
-    tick, bar = _progress(f"diagnose {tire or 'tractor'}", long=long)
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_fmus_") as tmp:
-        try:
-            diag, gain = run_tractor_diagnosis(rec, cutoff_hz=args.cutoff_hz, fmu_dir=tmp if keep_fmus else None,
-                                               workers=args.workers, progress=tick)
-        finally:
-            bar.close()
-        for line in diagnosis_warnings(diag, gain):
-            print(f"cleatfmu: warning: {rec.source}: {line}", file=sys.stderr)
-        files = {}
-        if args.fmu is not None:
-            own = next(p for p in gain.fmu_paths if p.stem.endswith(f"_{tire}"))
-            files[Path(args.fmu)] = own.read_bytes()
-        if args.fmu_dir is not None:
-            files.update({Path(args.fmu_dir) / p.name: p.read_bytes() for p in gain.fmu_paths})
-    if args.plot is not None:
-        from ..report.plots import plot_tractor_diagnosis, png_bytes
-        files[Path(args.plot)] = png_bytes(plot_tractor_diagnosis(diag, nrmse_before=gain.nrmse_before,
-                                                                  nrmse_after=gain.nrmse_after))
-    write_files(files)
+    with contextlib.ExitStack() as stack:
+        new_dir = None
+        if args.fmu_dir is not None:     # the folder as one set: the earlier FMUs or the new ones, never a mix
+            from .._folders import FolderSet
+            new_dir = stack.enter_context(FolderSet(args.fmu_dir, keep_existing=True))
+        diag, gain, files = _diagnose_into(args, rec, tire, long, keep_fmus, new_dir)
+        write_files(files)
     if args.json:
         doc = diag.tire_json(tire, nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after) if tire else \
             diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
@@ -163,6 +150,34 @@ def run(args) -> int:
     else:
         print(_tractor_text(diag, gain, args.verbose))
     return 0
+
+
+def _diagnose_into(args, rec, tire, long: bool, keep_fmus: bool, new_dir) -> tuple:
+    """Run the diagnosis; the files to write (``--fmu``, ``--plot``; ``--fmu-dir``'s FMUs go to `new_dir`,
+    the folder's new set)."""
+    import tempfile
+    from pathlib import Path
+
+    tick, bar = _progress(f"diagnose {tire or 'tractor'}", long=long)
+    with tempfile.TemporaryDirectory(prefix="cleatfmu_fmus_") as tmp:
+        try:
+            diag, gain = run_tractor_diagnosis(rec, cutoff_hz=args.cutoff_hz, fmu_dir=tmp if keep_fmus else None,
+                                               workers=args.workers, progress=tick)
+        finally:
+            bar.close()
+        for line in diagnosis_warnings(diag, gain):
+            print(f"cleatfmu: warning: {rec.source}: {line}", file=sys.stderr)
+        files = {}
+        if args.fmu is not None:
+            own = next(p for p in gain.fmu_paths if p.stem.endswith(f"_{tire}"))
+            files[Path(args.fmu)] = own.read_bytes()
+        if new_dir is not None:
+            files.update({Path(new_dir) / p.name: p.read_bytes() for p in gain.fmu_paths})
+    if args.plot is not None:
+        from ..report.plots import plot_tractor_diagnosis, png_bytes
+        files[Path(args.plot)] = png_bytes(plot_tractor_diagnosis(diag, nrmse_before=gain.nrmse_before,
+                                                                  nrmse_after=gain.nrmse_after))
+    return diag, gain, files
 
 
 def add_parser(subparsers) -> None:

@@ -3,19 +3,22 @@
 The body (rigid or pivoting front axle, dynamic indices) and the sets come
 from a whole-tractor recording (:func:`identification.comfort.ride.parameter_sets`);
 the ride from :func:`identification.comfort.ride.ride`; the rating is
-ISO 2631-1's Wk (vertical) at the seat.
+ISO 2631-1's Wk (vertical) at the seat: on the floor, or with ``--seat PARAMS.json`` on a suspended seat
+(:mod:`identification.comfort.seat`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import sys
+from pathlib import Path
 
 from ..errors import InputError
 from .._files import json_text
 
-__all__ = ["add_parser", "run", "DEFAULT_COMPARE", "format_expected", "format_contact", "format_axes"]
+__all__ = ["add_parser", "run", "DEFAULT_COMPARE", "format_expected", "format_contact", "format_axes", "format_seat"]
 
 DEFAULT_COMPARE = "paper,final"
 _CLASSES = ("A", "B", "C", "D", "E")
@@ -31,7 +34,16 @@ def add_parser(subparsers) -> None:
                     "daily exposure A(8) against EU directive 2002/44/EC.")
     p.add_argument("recording", metavar="REC.csv", nargs="?", help="a whole-tractor recording (four hubs)")
     p.add_argument("--example", metavar="NAME", help="an embedded recording instead of REC.csv (7kmh, 10kmh)")
-    p.add_argument("--road", default="B", type=str.upper, help="ISO 8608 road class, A (best) .. E (default B)")
+    p.add_argument("--road", default=None, type=str.upper, help="ISO 8608 road class, A (best) .. E (default B)")
+    p.add_argument("--coherence", choices=("uniform", "class"), default=None,
+                   help="coherence of the left and right tracks: uniform, exp(-2 n B) for every class (default), "
+                        "or class, measured per class A .. E (Project Chrono's RandomSurfaceTerrain; lower on rough "
+                        "roads)")
+    p.add_argument("--road-file", metavar="ROAD.csv|ROAD.crg", default=None,
+                   help="ride on this road (a road CSV x_m,left_m,right_m or an OpenCRG file) instead of a generated "
+                        "one: one ride, the class reported as 'file'")
+    p.add_argument("--save-road", metavar="OUT.csv|OUT.crg", default=None,
+                   help="write the road ridden (seed's road; both tracks) as a road CSV or an OpenCRG file")
     p.add_argument("--speed-kmh", type=float, default=None, help="driving speed, km/h (default: the recording's)")
     p.add_argument("--duration-s", type=float, default=60.0, help="length of the ride, s (default 60)")
     p.add_argument("--compare", default=DEFAULT_COMPARE,
@@ -61,6 +73,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--seat-height-m", type=float, default=None,
                    help="seat height above the axles, m, for the seat's fore-aft (pitch) and lateral (roll) "
                         "acceleration (default 0.9)")
+    p.add_argument("--seat", metavar="PARAMS.json", default=None,
+                   help="rate the occupant on a suspended seat (mass, spring, damper, end stops; see 'cleatfmu seat'): "
+                        "the z axis on the seat with its floor values alongside, the SEAT factor and the end-stop "
+                        "hits; x and y stay floor values (default: floor values, no seat suspension)")
     p.add_argument("--exposure-h", type=float, default=8.0, help="daily exposure time for A(8), h (default 8)")
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="processes of the diagnosis (default: 2 or the CPU count)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
@@ -78,12 +94,21 @@ def _default_realisations() -> int:
 def _check(args) -> list:
     from ..comfort.expected import MAX_REALISATIONS
 
+    if args.road_file is not None:
+        for option, value in (("--road", args.road), ("--coherence", args.coherence)):
+            if value is not None:
+                raise InputError(option, "applies to a generated road, not to --road-file")
+        if args.realisations not in (None, 1):
+            raise InputError("--realisations", "a road file is one road: one realisation")
+        args.realisations = 1
     if args.realisations is None:
         args.realisations = _default_realisations()
     if not 1 <= args.realisations <= MAX_REALISATIONS:
         raise InputError("--realisations", f"1 .. {MAX_REALISATIONS} expected, got {args.realisations}")
     if args.seed < 0:
         raise InputError("--seed", f"an integer >= 0 expected, got {args.seed}")
+    args.road = "B" if args.road is None else args.road
+    args.coherence = "uniform" if args.coherence is None else args.coherence
     if args.road not in _CLASSES:
         raise InputError("--road", f"unknown ISO 8608 class {args.road!r} (A, B, C, D or E)")
     if args.speed_kmh is not None and not (math.isfinite(args.speed_kmh) and 1.0 <= args.speed_kmh <= 60.0):
@@ -100,6 +125,10 @@ def _check(args) -> list:
         raise InputError("--seat-height-m", f"-1 .. 5 m above the axles expected, got {args.seat_height_m:g}")
     if args.workers < 1:
         raise InputError("--workers", f"at least 1, got {args.workers}")
+    args.seat_model = None
+    if args.seat is not None:
+        from ..comfort.seat import read_seat
+        args.seat_model = read_seat(args.seat)
     from ..comfort.ride import check_set_names
 
     from .util import recording_name_arg
@@ -112,23 +141,45 @@ def run(args) -> int:
     from .util import check_output
 
     names = _check(args)
+    road = None if args.road_file is None else _road_file(args.road_file)
     check_output(args.plot, ".png", "plot")
+    if args.save_road is not None:
+        if not args.save_road.lower().endswith((".csv", ".crg")):
+            raise InputError(args.save_road, "the road file name must end with .csv or .crg")
+        check_output(args.save_road, args.save_road[-4:].lower(), "road")
     if args.ssp is not None:
-        from .util import make_folders
-        make_folders(args.ssp)
+        from .util import check_folder
+        check_folder(args.ssp)
     rec = _recording_arg(args)
     from ..comfort.ride import ride_comparison
 
     if args.seat_x_m is not None and not -1.0 <= args.seat_x_m <= rec.wheelbase_m + 1.0:
         raise InputError("--seat-x-m", f"the seat must be on the tractor (-1 .. wheelbase + 1 m), got {args.seat_x_m:g}")
+    speed = rec.speed_m_s if args.speed_kmh is None else args.speed_kmh / 3.6
+    if road is not None and road.length_m < speed * args.duration_s:
+        raise InputError(args.road_file, f"the road is {road.length_m:g} m long, shorter than the ride "
+                                         f"({speed * args.duration_s:g} m: {speed * 3.6:.3g} km/h for "
+                                         f"{args.duration_s:g} s); shorten --duration-s")
     from .util import announce_compilation
     announce_compilation()
-    runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
-                                speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
-                                duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
-                                exposure_h=args.exposure_h, workers=args.workers, ssp_dir=args.ssp,
-                                realisations=args.realisations, tires=args.tires,
-                                seat_height_m=args.seat_height_m, body_doc=args.body)
+    with contextlib.ExitStack() as stack:
+        ssp_dir = None      # --ssp DIR as one set: the earlier systems or the new ones, its other files kept
+        if args.ssp is not None:
+            from .._folders import FolderSet
+            ssp_dir = stack.enter_context(FolderSet(args.ssp, keep_existing=True))
+        runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
+                                    speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
+                                    duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
+                                    exposure_h=args.exposure_h, workers=args.workers, ssp_dir=ssp_dir,
+                                    realisations=args.realisations, tires=args.tires,
+                                    seat_height_m=args.seat_height_m, body_doc=args.body, seat=args.seat_model,
+                                    road=road if road is not None else {"coherence": args.coherence})
+        if ssp_dir is not None:
+            doc["ssp"] = {name: str(Path(args.ssp) / Path(p).name) for name, p in doc["ssp"].items()}
+    if road is not None:
+        doc["road"]["file"] = str(args.road_file)
+    if args.save_road is not None:
+        _save_road(args, road, doc)
     speed, seat_x, how = doc["speed_m_s"], doc["seat"]["x_m"], doc["body"]["source"]
     for name, entry in doc["sets"].items():
         outside = [t for t, v in entry.get("map", {}).items() if v["extrapolation"]]
@@ -139,12 +190,14 @@ def run(args) -> int:
             print(f"cleatfmu: warning: set {name}: {entry['expected']['contact']['warning']}", file=sys.stderr)
     if args.plot:
         from ..report.plots import plot_ride, save_png
-        save_png(plot_ride(runs, road_class=args.road, speed_m_s=speed,
+        save_png(plot_ride(runs, road_class=doc["road"]["class"], speed_m_s=speed,
                            expected={n: v["expected"] for n, v in doc["sets"].items()}), args.plot)
     if args.json:
         print(json_text(doc))
     else:
-        print(f"{rec.source}: ISO 8608 class {args.road} road (seed {args.seed}), {speed * 3.6:.3g} km/h, "
+        what = f"road file {args.road_file} (class file)" if road is not None else \
+            f"ISO 8608 class {args.road} road (seed {args.seed}, {args.coherence} track coherence)"
+        print(f"{rec.source}: {what}, {speed * 3.6:.3g} km/h, "
               f"{args.duration_s:g} s; {how}; seat {seat_x:.2f} m behind the front axle")
         print(f"{'set':<16}{'k FL/FR/RL/RR kN/m':>24}{'a_w m/s2':>10}{'VDV':>8}{'MTVV':>8}{'A(8)':>8}")
         for name, r in runs.items():
@@ -154,13 +207,36 @@ def run(args) -> int:
         print(format_expected(doc))
         print(format_contact(doc))
         print(format_axes(doc))
+        if args.seat_model is not None:
+            print(format_seat(doc, args.seat))
         print(f"seat: {doc['seat']['values']}")
         if args.plot:
             print(f"wrote {args.plot}")
+        if args.save_road:
+            print(f"wrote {args.save_road}: the road ridden, both tracks")
         for name, path in doc.get("ssp", {}).items():
             print(f"wrote {path}: the ride with set {name} as an SSP 1.0 system of FMUs")
     return 0
 
+
+
+def _road_file(path):
+    """The road of ``--road-file`` (:mod:`identification.comfort.road_files`), read before the diagnosis."""
+    from ..comfort.road_files import read_road
+
+    return read_road(path)
+
+
+def _save_road(args, road, doc: dict) -> None:
+    """Write the road ridden: the file's, or seed's generated road again (same class, length, grid, seed and
+    coherence as :func:`~identification.comfort.ride.ride_comparison` drew it: the same heights)."""
+    from ..comfort.ride import ROAD_SPACING_M
+    from ..comfort.road import road_profile
+    from ..comfort.road_files import write_road
+
+    if road is None:
+        road = road_profile(args.road, doc["road"]["length_m"], ROAD_SPACING_M, args.seed, coherence=args.coherence)
+    write_road(road, args.save_road)
 
 
 def format_expected(doc: dict) -> str:
@@ -230,4 +306,24 @@ def format_axes(doc: dict) -> str:
             line += (f"; A(8) {a8:.3f} on axis {entry['three_axes']['exposure']['a8_axis']} "
                      f"({status}, {EU_A8_ACTION_M_S2:g} / {EU_A8_LIMIT_M_S2:g})")
         lines.append(line)
+    return "\n".join(lines)
+
+
+def format_seat(doc: dict, source: str = "") -> str:
+    """The suspended seat of a ``ride --seat`` document as text: the seat, then per set the occupant's and the
+    floor's z a_w, the SEAT factor and the end-stop hits (expected values over the roads)."""
+    seat = doc["seat"]["suspension"]
+    lines = [f"suspended seat{' ' + source if source else ''}: {seat['mass_kg']:g} kg, natural frequency "
+             f"{seat['natural_frequency_hz']:.2f} Hz, damping ratio {seat['damping_ratio']:.2f}, travel "
+             f"+-{seat['travel_m'] * 1e3:g} mm (expected values; z a_w in m/s2)"]
+    iso = doc["seat"]["iso5007"]
+    lines.append(f"on ISO 5007 class {iso['class']} ({iso['tractor_mass']}; the wheel loads give "
+                 f"{iso['tractor_mass_kg']:.0f} kg): SEAT {iso['seat_factor']:.3f} (linear seat "
+                 f"{iso['seat_factor_linear']:.3f}), end-stop hits {iso['end_stops']['hits']}")
+    for name, entry in doc["sets"].items():
+        e = entry["expected"]
+        lines.append(f"{name}: seat {e['a_w']['mean']:.3f}, floor {e['floor_a_w']['mean']:.3f}, SEAT "
+                     f"{e['seat_factor']['mean']:.3f} (linear seat from the road PSD "
+                     f"{e['psd']['seat_factor_linear']:.3f}), end-stop hits {e['end_stop_hits']['mean']:.3g} per "
+                     f"ride ({e['end_stop_share']['mean']:.2%} of the time)")
     return "\n".join(lines)

@@ -20,8 +20,9 @@ so the expected mean square of a weighted seat acceleration is
 with H_i the seat acceleration per unit road height under tire i (from the model's mass, stiffness and
 damping matrices, :func:`seat_transfer`), the rear tires delayed by the wheelbase, and S_ij the tracks'
 cross-spectra as :mod:`~identification.comfort.road` synthesises them: S(f) = Gd(f / v) / v on each
-track, the coherence γ²(n) = exp(−a n B) between the left and right ones.  This is E[a_w²] over roads
-(a long ride's limit); the Monte-Carlo counterpart is √(mean a_w²) over the realisations.
+track, the coherence γ²(n) of the road's model (uniform exp(−a n B) or by class) between the left and right
+ones.  This is E[a_w²] over roads (a long ride's limit); the Monte-Carlo counterpart is √(mean a_w²) over
+the realisations.
 """
 
 from __future__ import annotations
@@ -135,7 +136,7 @@ def seat_transfer(body: Body, k: dict, c: dict, row, frequency_hz) -> np.ndarray
 
 
 def psd_rating(body: Body, k: dict, c: dict, row, *, road, speed_m_s: float, weighting: str = "Wk",
-               points: int = PSD_POINTS) -> float:
+               points: int = PSD_POINTS, transfer=None) -> float:
     """Expected weighted RMS acceleration of a body point on a road class, from the PSD (module docstring).
 
     Parameters
@@ -143,12 +144,16 @@ def psd_rating(body: Body, k: dict, c: dict, row, *, road, speed_m_s: float, wei
     body, k, c, row
         As for :func:`seat_transfer`.
     road : RoadProfile
-        Gives the class, the band, the track width and the coherence decay (not the heights).
+        Gives the band, the PSD and the tracks' coherence (:meth:`RoadProfile.psd`, :meth:`RoadProfile.coherence`;
+        not the heights).
     speed_m_s : float
     weighting : str
         ISO 2631-1 weighting of the point's axis.
     points : int
         Log-spaced frequencies of the integral over the road's band seen at the speed.
+    transfer : callable, optional
+        A further linear stage from the point to the rated acceleration, ``transfer(frequency_hz)`` -> complex
+        (e.g. a suspended seat's :meth:`~identification.comfort.seat.SeatModel.transmissibility`).
 
     Returns
     -------
@@ -156,16 +161,17 @@ def psd_rating(body: Body, k: dict, c: dict, row, *, road, speed_m_s: float, wei
         √E[a_w²], m/s².
     """
     from .iso2631 import weighting_response
-    from .road import iso8608_psd, track_coherence
 
     lo, hi = road.band_cpm
     f = np.geomspace(lo * speed_m_s, hi * speed_m_s, int(points))
     n = f / speed_m_s
-    s = iso8608_psd(n, road.road_class, band_cpm=None) / speed_m_s        # m²/Hz on each track
-    gamma = np.sqrt(track_coherence(n, road.track_width_m, decay=road.coherence_decay))
+    s = road.psd(n) / speed_m_s                   # m²/Hz on each track (NaN for a road from a file)
+    gamma = np.sqrt(road.coherence(n))            # the road's coherence model (uniform or by class)
     delay = np.array([0.0 if t in FRONT_TIRES else body.wheelbase_m / speed_m_s for t in body.tires])
     left = np.array([t in LEFT_TIRES for t in body.tires])
     h = seat_transfer(body, k, c, row, f) * np.exp(-2j * math.pi * f[:, None] * delay[None, :])
+    if transfer is not None:
+        h = h * np.asarray(transfer(f))[:, None]
     hl, hr = h[:, left], h[:, ~left]
     # Σ_ij H_i S_ij H_j*: S_ij = S on the same track, γ S across the tracks
     total = (np.abs(hl.sum(axis=1)) ** 2 + np.abs(hr.sum(axis=1)) ** 2
@@ -184,7 +190,7 @@ def rating_values(result) -> dict:
 
 
 def expected_set(per_ride: list, *, body: Body, k: dict, c: dict, row, road, speed_m_s: float,
-                 seeds: list, level: float = LEVEL, rows: dict | None = None) -> dict:
+                 seeds: list, level: float = LEVEL, rows: dict | None = None, seat=None) -> dict:
     """One parameter set's expected ratings over its rides on the realisations (JSON-ready, SI units).
 
     Parameters
@@ -198,6 +204,9 @@ def expected_set(per_ride: list, *, body: Body, k: dict, c: dict, row, road, spe
     rows : dict, optional
         The seat's ``x`` and ``y`` rows (:func:`identification.comfort.seat_axes.axis_rows`): their a_w from the
         PSD (Wd) as well.
+    seat : SeatModel, optional
+        A suspended seat rated on the z axis: the a_w from the PSD is the linear seat's (no end-stop
+        contact), with the floor's (``psd.floor_a_w``) and their ratio (``psd.seat_factor_linear``).
 
     Returns
     -------
@@ -208,9 +217,13 @@ def expected_set(per_ride: list, *, body: Body, k: dict, c: dict, row, road, spe
     doc = {"realisations": len(per_ride), "seeds": list(seeds)}
     for key in per_ride[0]:
         doc[key] = summarise([r[key] for r in per_ride], level)
-    predicted = psd_rating(body, k, c, row, road=road, speed_m_s=speed_m_s, weighting="Wk")
+    predicted = psd_rating(body, k, c, row, road=road, speed_m_s=speed_m_s, weighting="Wk",
+                           transfer=None if seat is None else seat.transmissibility)
     rms = float(math.sqrt(np.mean([r["a_w"] ** 2 for r in per_ride])))
     doc["psd"] = {"a_w": predicted, "monte_carlo_rms_a_w": rms, "ratio": rms / predicted if predicted > 0 else None}
+    if seat is not None:
+        floor = psd_rating(body, k, c, row, road=road, speed_m_s=speed_m_s, weighting="Wk")
+        doc["psd"].update(floor_a_w=floor, seat_factor_linear=predicted / floor if floor > 0 else None)
     for axis in ("x", "y") if rows is not None else ():
         doc["psd"][f"{axis}_a_w"] = psd_rating(body, k, c, rows[axis], road=road, speed_m_s=speed_m_s, weighting="Wd")
         if f"{axis}_a_w" in per_ride[0]:

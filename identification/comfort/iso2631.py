@@ -1,16 +1,17 @@
 """Whole-body vibration after ISO 2631-1:1997: frequency weightings, a_w, VDV, MTVV, daily exposure.
 
-The frequency weightings Wk (vertical), Wd (horizontal) and Wf (motion
-sickness) are the analog filters of the standard's Annex A, with the parameters
-of its Table A.1 (:data:`WEIGHTINGS`).  :func:`weight` applies one to a sampled
-acceleration; :func:`comfort` evaluates a record by the basic method (weighted
-RMS a_w) and the additional methods (running RMS with MTVV, fourth-power
-vibration dose value VDV), and for Wk and Wd compares the daily exposure with
-the whole-body values of EU directive 2002/44/EC.
+The frequency weightings Wk (vertical), Wd (horizontal), Wf (motion sickness) and the additional Wc
+(seat-back fore-aft), We (rotational), Wj (vertical, under a recumbent person's head) are the analog
+filters of the standard's Annex A, with the parameters of its Table A.1 (:data:`WEIGHTINGS`; tabulated
+in ISO 8041 too).  :func:`weight` applies one to a sampled acceleration; :func:`comfort` evaluates a
+record by the basic method (weighted RMS a_w) and the additional methods (running RMS with MTVV,
+fourth-power vibration dose value VDV), and for Wk and Wd compares the daily exposure with the
+whole-body values of EU directive 2002/44/EC.
 
-Units are SI throughout: acceleration m/s², time s, frequency Hz, VDV
-m/s^1.75, MSDV m/s^1.5.  Problems with the caller's input raise
-:class:`~identification.errors.InputError` naming the argument.
+Units are SI throughout: acceleration m/s², time s, frequency Hz, VDV m/s^1.75, MSDV m/s^1.5.  The
+weightings are dimensionless gains: We weights rotational accelerations, rad/s² in and out (VDV in
+rad/s^1.75); ISO 2631-1 clause 8.2.3 rates rotation for comfort only, each axis times its factor (0.63
+m/rad roll, 0.4 pitch, 0.2 yaw).  Bad input raises :class:`~identification.errors.InputError` naming it.
 """
 
 from __future__ import annotations
@@ -66,9 +67,12 @@ class Weighting:
         The frequency range the standard evaluates with this weighting (ISO 2631-1 clause 1), Hz.
         A record must be sampled at twice its upper end at least.
     k : float
-        Multiplying factor of the health evaluation (seated: 1.0 vertical, 1.4 horizontal).
+        Multiplying factor of the evaluation (seated health: 1.0 vertical, 1.4 horizontal; 0.8 for
+        the seat-back's Wc; 1.0 where the factor depends on the axis, as We's, ISO 2631-1 clause 8.2.3).
     exposure_limits : bool
         Whether the daily-exposure values of 2002/44/EC apply (health weightings Wk and Wd).
+    unit : str
+        Unit of the weighted quantity: ``"m/s²"``, or ``"rad/s²"`` for the rotational We.
     """
 
     name: str
@@ -85,6 +89,7 @@ class Weighting:
     band_hz: tuple[float, float]
     k: float
     exposure_limits: bool
+    unit: str = "m/s²"
 
     def slowest_decay_rate(self) -> float:
         """Smallest |Re p| over the weighting's poles p, 1/s (sets how long its impulse response lasts)."""
@@ -94,7 +99,9 @@ class Weighting:
                    for f, q in pairs if math.isfinite(f) for z in [0.5 / q])
 
 
-#: The weightings of ISO 2631-1:1997 Table A.1, by name.
+#: The weightings of ISO 2631-1:1997 Table A.1, by name: the principal Wk, Wd, Wf and the additional Wc,
+#: We, Wj (Table 2: Wc seat-back x; We rotational rx, ry, rz in rad/s²; Wj vertical under a recumbent
+#: person's head): Wc, We as Wd with f3 = f4 = 8 Hz, 1 Hz; Wj no a-v transition, a step 3.75 -> 5.32 Hz.
 WEIGHTINGS: dict[str, Weighting] = {
     "Wk": Weighting("Wk", "vertical (z), seated or standing", 0.4, 100.0, 12.5, 12.5, 0.63,
                     2.37, 0.91, 3.35, 0.91, band_hz=(0.5, 80.0), k=1.0, exposure_limits=True),
@@ -102,11 +109,17 @@ WEIGHTINGS: dict[str, Weighting] = {
                     _INF, 1.0, _INF, 1.0, band_hz=(0.5, 80.0), k=1.4, exposure_limits=True),
     "Wf": Weighting("Wf", "vertical (z), motion sickness", 0.08, 0.63, _INF, 0.25, 0.86,
                     0.0625, 0.80, 0.10, 0.80, band_hz=(0.1, 0.5), k=1.0, exposure_limits=False),
+    "Wc": Weighting("Wc", "horizontal (x), seat-back", 0.4, 100.0, 8.0, 8.0, 0.63,
+                    _INF, 1.0, _INF, 1.0, band_hz=(0.5, 80.0), k=0.8, exposure_limits=False),
+    "We": Weighting("We", "rotational (rx, ry, rz), seated; rad/s²", 0.4, 100.0, 1.0, 1.0, 0.63,
+                    _INF, 1.0, _INF, 1.0, band_hz=(0.5, 80.0), k=1.0, exposure_limits=False, unit="rad/s²"),
+    "Wj": Weighting("Wj", "vertical (x), under the head, recumbent", 0.4, 100.0, _INF, _INF, 1.0,
+                    3.75, 0.91, 5.32, 0.91, band_hz=(0.5, 80.0), k=1.0, exposure_limits=False),
 }
 
 
 def get_weighting(weighting: str | Weighting) -> Weighting:
-    """The :class:`Weighting` named `weighting` (``"Wk"``, ``"Wd"``, ``"Wf"``, any case), or `weighting` itself."""
+    """The :class:`Weighting` named `weighting` (a key of :data:`WEIGHTINGS`, any case), or `weighting` itself."""
     if isinstance(weighting, Weighting):
         return weighting
     for name, w in WEIGHTINGS.items():
@@ -122,7 +135,7 @@ def weighting_response(frequency_hz, weighting: str | Weighting = "Wk") -> np.nd
     ----------
     frequency_hz : array_like
         Frequencies, Hz (finite, >= 0).
-    weighting : {"Wk", "Wd", "Wf"} or Weighting
+    weighting : {"Wk", "Wd", "Wf", "Wc", "We", "Wj"} or Weighting
         The weighting (ISO 2631-1:1997 Annex A).
 
     Returns
@@ -138,7 +151,8 @@ def weighting_response(frequency_hz, weighting: str | Weighting = "Wk") -> np.nd
     w1, w2, w4 = (2.0 * np.pi * x for x in (w.f1_hz, w.f2_hz, w.f4_hz))
     q = _BUTTERWORTH_Q
     h = s * s / (s * s + s * w1 / q + w1 * w1) * (w2 * w2) / (s * s + s * w2 / q + w2 * w2)
-    h = h * (1.0 + s / (2.0 * np.pi * w.f3_hz)) / (1.0 + s / (w.q4 * w4) + (s / w4) ** 2)
+    if math.isfinite(w.f4_hz):                  # Wj has no acceleration-velocity transition
+        h = h * (1.0 + s / (2.0 * np.pi * w.f3_hz)) / (1.0 + s / (w.q4 * w4) + (s / w4) ** 2)
     if math.isfinite(w.f5_hz):
         w5, w6 = 2.0 * np.pi * w.f5_hz, 2.0 * np.pi * w.f6_hz
         h = h * (1.0 + s / (w.q5 * w5) + (s / w5) ** 2) / (1.0 + s / (w.q6 * w6) + (s / w6) ** 2) * (w5 / w6) ** 2
@@ -188,13 +202,13 @@ def weight(acc_m_s2, sample_rate_hz: float, weighting: str | Weighting = "Wk") -
         Acceleration, m/s², uniformly sampled along the last axis (at least 2 samples, finite).
     sample_rate_hz : float
         Sampling rate, Hz; at least twice the upper end of the weighting's frequency
-        range (``WEIGHTINGS[name].band_hz``: 160 Hz for Wk and Wd, 1 Hz for Wf).
-    weighting : {"Wk", "Wd", "Wf"} or Weighting
+        range (``WEIGHTINGS[name].band_hz``: 160 Hz for Wk, Wd, Wc, We, Wj; 1 Hz for Wf).
+    weighting : {"Wk", "Wd", "Wf", "Wc", "We", "Wj"} or Weighting
 
     Returns
     -------
     ndarray
-        a_w(t), m/s², the shape of `acc_m_s2`.
+        a_w(t), m/s² (rad/s² for We, whose input is a rotational acceleration), the shape of `acc_m_s2`.
     """
     w = get_weighting(weighting)
     fs = _rate(sample_rate_hz, w)
@@ -354,8 +368,10 @@ def comfort(acc_m_s2, sample_rate_hz: float, weighting: str | Weighting = "Wk", 
         Unweighted acceleration, m/s², 1-D, uniformly sampled, at least `tau_s` long.
     sample_rate_hz : float
         Sampling rate, Hz (see :func:`weight` for the lowest accepted).
-    weighting : {"Wk", "Wd", "Wf"} or Weighting
-        Wk for vertical, Wd for horizontal vibration, Wf for motion sickness.
+    weighting : {"Wk", "Wd", "Wf", "Wc", "We", "Wj"} or Weighting
+        Wk for vertical, Wd for horizontal vibration, Wf for motion sickness; Wc for the seat-back's
+        fore-aft vibration, We for rotational vibration (input and results in rad/s²), Wj for the
+        vertical vibration under a recumbent person's head.
     exposure_h : float, optional
         Daily exposure time, h (0 < T <= 24), for A(8) and the daily VDV (the record standing
         for the whole exposure).  Not for Wf.

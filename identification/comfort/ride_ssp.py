@@ -46,8 +46,12 @@ def write_ride_ssps(folder, body, sets: dict, *, road, speed_m_s: float, duratio
             path = Path(tmp, names[name])
             write_tractor_ssp(path, model, start_s=0.0, stop_s=float(duration_s), step_s=step_s,
                               seat_x_m=seat_x_m, seat_y=seat_y, name=path.stem,
-                              description=f"Ride on an ISO 8608 class {road.road_class} road at "
+                              description=f"Ride on {_road_name(road)} at "
                                           f"{speed_m_s * 3.6:.3g} km/h, tire set {name}")
             staged[folder / names[name]] = path
         publish_files(staged)
     return {name: folder / names[name] for name in sets}
+
+
+def _road_name(road) -> str:
+    return "a road read from a file" if road.road_class == "file" else f"an ISO 8608 class {road.road_class} road"

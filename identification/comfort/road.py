@@ -10,15 +10,15 @@ each next class four times the previous one, up to H) and the spectrum
 defined over the band 0.011–2.83 cycles/m (:data:`ISO8608_BAND_CPM`).
 
 The left and right tracks share the spectrum Gd(n); their magnitude-squared
-coherence follows the exponential model (:func:`track_coherence`)::
-
-    γ²(n) = exp(−a · n · B),
-
-with B the track width (m) and a the dimensionless decay
-(:data:`DEFAULT_COHERENCE_DECAY`): the tracks are fully coherent at long
-wavelengths and become independent once the wavelength is short against the
-track width.  This model is a parametric choice of this module; ISO 8608
-itself does not specify the coherence between tracks.
+coherence γ²(n) follows one of the models of
+:mod:`~identification.comfort.coherence`: by default the uniform exponential
+γ²(n) = exp(−a · n · B) (:func:`track_coherence`, B the track width, m, a the
+dimensionless :data:`DEFAULT_COHERENCE_DECAY`), or, with ``coherence="class"``,
+the class-dependent coherence measured on roads of classes A to E (Project
+Chrono's RandomSurfaceTerrain; lower on rough roads).  Either way the tracks
+are fully coherent at long wavelengths and become independent once the
+wavelength is short against the track width; ISO 8608 itself does not specify
+the coherence between tracks.
 
 :func:`road_profile` synthesises both tracks as sums of harmonics with the
 class's amplitudes and random phases (inverse FFT): the left track is
@@ -40,10 +40,12 @@ import numpy as np
 
 from ..errors import InputError
 from ._checks import positive
+from .coherence import COHERENCE_MODELS, DEFAULT_COHERENCE_DECAY, track_coherence
+from .coherence import coherence as model_coherence
 
 __all__ = ["ISO8608_N0_CPM", "ISO8608_WAVINESS", "ISO8608_BAND_CPM", "ISO8608_GD_N0_M3", "CLEAT_HEIGHT_M",
-           "DEFAULT_TRACK_WIDTH_M", "DEFAULT_COHERENCE_DECAY", "RoadProfile", "iso8608_psd", "track_coherence",
-           "MAX_POINTS", "road_profile", "profile_height", "cleat_profile"]
+           "DEFAULT_TRACK_WIDTH_M", "DEFAULT_COHERENCE_DECAY", "COHERENCE_MODELS", "FILE_CLASS", "RoadProfile",
+           "iso8608_psd", "track_coherence", "MAX_POINTS", "road_profile", "profile_height", "cleat_profile"]
 
 #: Reference spatial frequency n0 of ISO 8608, cycles/m.
 ISO8608_N0_CPM = 0.1
@@ -58,8 +60,9 @@ ISO8608_GD_N0_M3 = {"A": 16e-6, "B": 64e-6, "C": 256e-6, "D": 1024e-6, "E": 4096
 CLEAT_HEIGHT_M = 0.04
 #: Default distance between the left and right tracks, m (a mid-size tractor's track width).
 DEFAULT_TRACK_WIDTH_M = 1.8
-#: Default decay a of the exponential coherence model γ²(n) = exp(−a n B).
-DEFAULT_COHERENCE_DECAY = 2.0
+#: The class of a road read from a file (:mod:`~identification.comfort.road_files`): its spectrum and
+#: coherence are those of its heights, not of a model.
+FILE_CLASS = "file"
 #: Largest number of grid points a profile may have.
 MAX_POINTS = 20_000_000
 #: The synthesis period holds at least this many cycles of the band's lowest frequency, so that the
@@ -123,32 +126,6 @@ def iso8608_psd(n_cpm, road_class: str = "A", *, band_cpm=ISO8608_BAND_CPM) -> n
     return np.where((n >= lo) & (n <= hi), psd, 0.0)
 
 
-def track_coherence(n_cpm, track_width_m: float = DEFAULT_TRACK_WIDTH_M, *,
-                    decay: float = DEFAULT_COHERENCE_DECAY) -> np.ndarray:
-    """Magnitude-squared coherence of the left and right tracks, γ²(n) = exp(−a n B).
-
-    Parameters
-    ----------
-    n_cpm : array_like
-        Spatial frequencies, cycles/m (≥ 0).
-    track_width_m : float
-        Distance B between the tracks, m (> 0).
-    decay : float
-        Dimensionless decay a (≥ 0; 0: identical tracks).
-
-    Returns
-    -------
-    ndarray
-        γ²(n) in [0, 1], the shape of `n_cpm`.
-    """
-    b = _positive(track_width_m, "track width")
-    a = float(decay)
-    if not (math.isfinite(a) and a >= 0):
-        raise InputError("coherence decay", f"must be a finite number >= 0, got {decay!r}")
-    n = np.asarray(n_cpm, dtype=float)
-    return np.exp(-a * np.abs(n) * b)
-
-
 @dataclass(frozen=True, eq=False)
 class RoadProfile:
     """A two-track road profile on a regular grid.
@@ -160,19 +137,21 @@ class RoadProfile:
     left_m, right_m : ndarray
         Heights of the left and right tracks, m.
     road_class : str
-        ISO 8608 class.
+        ISO 8608 class, or :data:`FILE_CLASS` for a road read from a file.
     gd_n0_m3 : float
-        The class's Gd(n0), m³.
+        The class's Gd(n0), m³ (NaN for a road from a file).
     band_cpm : tuple of float
         Band of the synthesised spectrum, cycles/m.
     track_width_m : float
         Distance between the tracks, m.
     coherence_decay : float
-        Decay a of the coherence model γ²(n) = exp(−a n B).
+        Decay a of the uniform coherence model γ²(n) = exp(−a n B).
     seed : int
-        Seed of the random phases.
+        Seed of the random phases (-1 for a road from a file).
     period_m : float
         Period of the synthesis (the profile repeats after it; ≥ the profile's length), m.
+    coherence_model : str
+        ``"uniform"`` or ``"class"`` (:data:`COHERENCE_MODELS`), the model of the tracks' coherence.
     """
 
     x_m: np.ndarray
@@ -185,6 +164,7 @@ class RoadProfile:
     coherence_decay: float
     seed: int
     period_m: float = 0.0
+    coherence_model: str = "uniform"
 
     @property
     def spacing_m(self) -> float:
@@ -202,9 +182,24 @@ class RoadProfile:
         return {"standard": "ISO 8608", "road_class": self.road_class, "gd_n0_m3": self.gd_n0_m3,
                 "n0_cpm": ISO8608_N0_CPM, "waviness": ISO8608_WAVINESS, "band_cpm": list(self.band_cpm),
                 "length_m": self.length_m, "spacing_m": self.spacing_m, "n_points": int(self.x_m.size),
-                "coherence_model": "exp(-a n B)", "coherence_decay": self.coherence_decay,
+                "coherence": self.coherence_model, "coherence_decay": self.coherence_decay,
+                "coherence_model": {"uniform": "exp(-a n B)", "class": "[1 + (2 pi n B / Omega_p)^2]^(-p)"}.get(
+                    self.coherence_model, "none"),
                 "track_width_m": self.track_width_m, "seed": self.seed, "period_m": self.period_m,
                 "rms_left_m": float(np.std(self.left_m)), "rms_right_m": float(np.std(self.right_m))}
+
+    def psd(self, n_cpm) -> np.ndarray:
+        """The one-track displacement PSD Gd(n) the road was synthesised with, m³ (NaN for a road from a file)."""
+        if self.road_class == FILE_CLASS:
+            return np.full(np.shape(n_cpm), np.nan)
+        return iso8608_psd(n_cpm, self.road_class, band_cpm=None)
+
+    def coherence(self, n_cpm) -> np.ndarray:
+        """The tracks' magnitude-squared coherence γ²(n) the road was synthesised with (NaN for a file's road)."""
+        if self.road_class == FILE_CLASS:
+            return np.full(np.shape(n_cpm), np.nan)
+        return model_coherence(n_cpm, self.track_width_m, model=self.coherence_model, road_class=self.road_class,
+                               decay=self.coherence_decay)
 
     def height(self, x_m, track: str = "left", *, fill: float | None = None) -> np.ndarray:
         """Height of a track at arbitrary positions (see :func:`profile_height`)."""
@@ -229,12 +224,12 @@ def _fast_length(n: int) -> int:
 
 def road_profile(road_class: str, length_m: float, spacing_m: float, seed: int, *,
                  track_width_m: float = DEFAULT_TRACK_WIDTH_M, coherence_decay: float = DEFAULT_COHERENCE_DECAY,
-                 band_cpm=ISO8608_BAND_CPM) -> RoadProfile:
+                 band_cpm=ISO8608_BAND_CPM, coherence: str = "uniform") -> RoadProfile:
     """A random two-track road of an ISO 8608 class, reproducible from its seed.
 
     Both tracks have the class's PSD Gd(n) over `band_cpm` (zero outside) in expectation, and
-    the magnitude-squared coherence γ²(n) = exp(−a n B) between them (see the module docstring
-    for the synthesis).  Each track has zero mean over the synthesis period.
+    the magnitude-squared coherence γ²(n) of the `coherence` model between them (see the module
+    docstring for the synthesis).  Each track has zero mean over the synthesis period.
 
     Parameters
     ----------
@@ -254,6 +249,11 @@ def road_profile(road_class: str, length_m: float, spacing_m: float, seed: int, 
         tracks).
     band_cpm : tuple of float, optional
         Band (low, high) of the spectrum, cycles/m (default ISO 8608's 0.011–2.83).
+    coherence : {"uniform", "class"}, optional
+        The tracks' coherence model (:mod:`~identification.comfort.coherence`): ``"uniform"``
+        (default) exp(−a n B) with a = `coherence_decay`; ``"class"`` the class-dependent measured
+        coherence (classes A to E; `coherence_decay` is then not used).  The left track is the
+        same for both models and a seed.
 
     Returns
     -------
@@ -271,6 +271,9 @@ def road_profile(road_class: str, length_m: float, spacing_m: float, seed: int, 
     dx = _positive(spacing_m, "spacing")
     lo, hi = _band(band_cpm)
     track_coherence(0.0, track_width_m, decay=coherence_decay)      # checks the width and the decay
+    if coherence not in COHERENCE_MODELS:
+        raise InputError("coherence", f"unknown coherence model {coherence!r} (allowed: {', '.join(COHERENCE_MODELS)})")
+    model_coherence(0.0, track_width_m, model=coherence, road_class=name)    # checks the class has the model
     if dx > 1.0 / (2.0 * hi) * (1 + 1e-12):
         raise InputError("spacing", f"{dx:g} m is too coarse for the band up to {hi:g} cycles/m "
                                     f"(at most 1/(2 n_high) = {1.0 / (2.0 * hi):.4g} m)")
@@ -291,7 +294,7 @@ def road_profile(road_class: str, length_m: float, spacing_m: float, seed: int, 
         inside[-1] = False                        # the Nyquist bin carries no phase
     gd = ISO8608_GD_N0_M3[name] * (n[inside] / ISO8608_N0_CPM) ** (-ISO8608_WAVINESS)
     amplitude = np.sqrt(2.0 * gd / period)        # A_k of A_k cos(2 pi n_k x + phi_k); variance sum Gd dn
-    gamma = np.sqrt(track_coherence(n[inside], track_width_m, decay=coherence_decay))
+    gamma = np.sqrt(model_coherence(n[inside], track_width_m, model=coherence, road_class=name, decay=coherence_decay))
     rng = np.random.default_rng(int(seed))
     phase_left = np.exp(2j * np.pi * rng.random(amplitude.size))
     phase_own = np.exp(2j * np.pi * rng.random(amplitude.size))
@@ -305,7 +308,7 @@ def road_profile(road_class: str, length_m: float, spacing_m: float, seed: int, 
     x = dx * np.arange(n_points)
     return RoadProfile(x_m=x, left_m=left, right_m=right, road_class=name, gd_n0_m3=ISO8608_GD_N0_M3[name],
                        band_cpm=(lo, hi), track_width_m=float(track_width_m), coherence_decay=float(coherence_decay),
-                       seed=int(seed), period_m=float(period))
+                       seed=int(seed), period_m=float(period), coherence_model=coherence)
 
 
 def profile_height(profile: RoadProfile, x_m, track: str = "left", *, fill: float | None = None) -> np.ndarray:

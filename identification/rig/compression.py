@@ -16,10 +16,11 @@ holds k_static; the pipeline never reads it.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
+
+from .._files import json_text
 
 __all__ = ["COMPRESSION_DEFAULTS", "compression_test", "write_compression"]
 
@@ -95,6 +96,6 @@ def write_compression(stem, *, seed: int = 5, **overrides) -> Path:
               for i, (d, f) in enumerate(zip(run["deformation_m"], run["force_N"]))]
     csv_path = stem.with_name(stem.name + ".csv")
     csv_path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    stem.with_name(stem.name + ".truth.json").write_text(json.dumps(run["truth"], indent=1) + "\n",
+    stem.with_name(stem.name + ".truth.json").write_text(json_text(run["truth"], indent=1) + "\n",
                                                          encoding="utf-8")
     return csv_path
