@@ -68,8 +68,9 @@ def command_files() -> dict[str, bytes]:
     """File name -> bytes of the valid inputs: ``run.csv``/``run.json`` (a four-hub rig run at 250 Hz),
     ``diag.json`` (its ``diagnose --json``), ``fmus/run_<TIRE>.fmu`` (its ``--fmu-dir``), ``params4.json``
     (its ``identify --json``), ``summary.json`` (a report summary of it and of a 10 km/h run, the diagnosis
-    in its entry), ``tire_map.json`` (``map`` of that summary) and ``comp.csv`` (the embedded compression
-    test)."""
+    in its entry), ``tire_map.json`` (``map`` of that summary), ``comp.csv`` (the embedded compression
+    test), ``road.csv`` and ``road.crg`` (a ride's ``--save-road``, 20 m of a class B road) and ``seat.json``
+    (the default seat's parameters)."""
     files = {}
     with tempfile.TemporaryDirectory() as work:
         w = Path(work)
@@ -92,11 +93,21 @@ def command_files() -> dict[str, bytes]:
         summary = {"format": "cleatfmu-report-summary/1", "recordings": recordings}
         (w / "summary.json").write_text(json.dumps(summary))
         _main(["map", w / "summary.json", "-o", w / "map", "--no-fmu"])
+        (w / "diag.json").write_text(json.dumps(diag))
+        _main(["ride", w / "run.csv", "--body", w / "diag.json", "--compare=final", "--workers=1", "--duration-s=10",
+               "--realisations=1", "--save-road", w / "road.csv"])
+        from identification.comfort.road_files import read_road, write_road
+        from identification.comfort.seat import DEFAULT_SEAT
+
+        write_road(read_road(w / "road.csv"), w / "road.crg")
+        seat = {k: v for k, v in DEFAULT_SEAT.to_json().items() if k not in ("natural_frequency_hz", "damping_ratio")}
         files = {"run.csv": (w / "run.csv").read_bytes(), "run.json": (w / "run.json").read_bytes(),
                  "diag.json": json.dumps(diag, indent=1).encode(), "summary.json": json.dumps(summary).encode(),
                  "params4.json": json.dumps(ident["run"], indent=1).encode(),
                  "tire_map.json": (w / "map" / "tire_map.json").read_bytes(),
-                 "comp.csv": (ROOT / "identification" / "data" / "testday_compression.csv").read_bytes()}
+                 "comp.csv": (ROOT / "identification" / "data" / "testday_compression.csv").read_bytes(),
+                 "road.csv": (w / "road.csv").read_bytes(), "road.crg": (w / "road.crg").read_bytes(),
+                 "seat.json": json.dumps(dict(seat, comment="a passive seat"), indent=1).encode()}
         for tire in TIRES:
             files[f"fmus/run_{tire}.fmu"] = (w / "fmus" / f"run_{tire}.fmu").read_bytes()
     return files
@@ -265,6 +276,42 @@ def zip_file(draw, data: bytes) -> bytes:
     return out.getvalue()
 
 
+@st.composite
+def text_file(draw, name: str) -> bytes:
+    """The valid text file `name` (an OpenCRG road) with 1-3 line mutations: a line deleted, repeated, cut,
+    replaced, a fixed-width field or a character replaced; or garbage."""
+    if draw(st.integers(0, 9)) == 0:
+        return draw(garbage)
+    lines = command_files()[name].decode("latin-1").splitlines()
+    for _ in range(draw(st.integers(1, 3))):
+        i = draw(st.integers(0, min(len(lines) - 1, 40)) if draw(st.booleans()) else st.integers(0, len(lines) - 1))
+        kind = draw(st.sampled_from(["delete", "repeat", "cut", "replace", "field", "char", "truncate"]))
+        if kind == "delete":
+            del lines[i]
+        elif kind == "repeat":
+            lines.insert(i, lines[i])
+        elif kind == "cut":
+            lines[i] = lines[i][:draw(st.integers(0, max(0, len(lines[i]) - 1)))]
+        elif kind == "replace":
+            lines[i] = draw(st.one_of(st.sampled_from(["$", "$$$$", "#:KDBI", "#:XXXX", "D:long section 3,m",
+                                                      "REFERENCE_LINE_INCREMENT = 0", "LONG_SECTION_V_LEFT = nan",
+                                                      "REFERENCE_LINE_INCREMENT = -0.01", "*", "!", ""]),
+                                      st.text(max_size=30).filter(lambda t: "\n" not in t and "\r" not in t)))
+        elif kind == "field" and len(lines[i]) >= 20:
+            j = draw(st.integers(0, len(lines[i]) // 20 - 1)) * 20
+            cell = draw(st.sampled_from(["nan", "inf", "1e308", "-1e400", "*", "abc", "1" * 25, ""]))
+            lines[i] = lines[i][:j] + cell.rjust(20)[:20] + lines[i][j + 20:]
+        elif kind == "char" and lines[i]:
+            j = draw(st.integers(0, len(lines[i]) - 1))
+            char = draw(st.sampled_from(["x", "-", ".", "e", " ", "\x00", "\u00e9"]))
+            lines[i] = lines[i][:j] + char + lines[i][j + 1:]
+        elif kind == "truncate":
+            lines = lines[:i]
+        if not lines:
+            break
+    return ("\n".join(lines) + "\n").encode("latin-1", "replace")
+
+
 def _fmu_changed(draw) -> dict:
     """One of the four FMUs mutated (file name -> bytes)."""
     tire = draw(st.sampled_from(TIRES))
@@ -375,7 +422,8 @@ def ride_cases(draw) -> Case:
     body = draw(st.sampled_from(["diag.json", "diag.json", "summary.json"]))
     sets = draw(st.lists(st.sampled_from(_GOOD_SETS), min_size=1, max_size=2, unique=True))
     if bad:
-        target = draw(st.sampled_from(["body", "params", "map", "comp", "fmu", "rec", "options", "options"]))
+        target = draw(st.sampled_from(["body", "params", "map", "comp", "fmu", "rec", "road", "road", "seat",
+                                       "options", "options"]))
         if target == "body":
             changed[body] = draw(json_file(body))
         elif target == "params":
@@ -392,10 +440,15 @@ def ride_cases(draw) -> Case:
             sets = ["fmu={dir}/fmus"]
         elif target == "rec":
             changed["run.csv"] = draw(csv_file("run.csv"))
+        elif target == "road":
+            road = draw(st.sampled_from(["road.csv", "road.crg"]))
+            changed[road] = draw(csv_file(road) if road == "road.csv" else text_file(road))
+        elif target == "seat":
+            changed["seat.json"] = draw(json_file("seat.json"))
         else:
             sets = sets + [draw(st.sampled_from(_BAD_SETS))]
     files = _files("run.csv", "run.json", "diag.json", "summary.json", "params4.json", "tire_map.json",
-                   "comp.csv", "fmus", **changed)
+                   "comp.csv", "fmus", "road.csv", "road.crg", "seat.json", **changed)
     args = ["{dir}/run.csv", "--body={dir}/" + body, "--compare=" + ",".join(sets), "--workers=1"]
     options = {"--duration-s": ["10", "12"], "--realisations": ["1", "1", "2"], "--road": ["A", "B", "e"],
                "--seed": ["0", "1", "7"], "--tires": ["auto", "linear", "lift-off"], "--exposure-h": ["8", "0.5", "24"],
@@ -412,6 +465,18 @@ def ride_cases(draw) -> Case:
     if bad and target == "options" and draw(st.booleans()):
         option = draw(st.sampled_from(sorted(broken)))
         args.append(f"{option}={draw(st.sampled_from(broken[option]))}")
+    road = draw(st.sampled_from([None, None, "road.csv", "road.crg"]))
+    if bad and target == "road":
+        road = next(name for name in changed if name.startswith("road."))
+    if road is not None:
+        args.append("--road-file={dir}/" + road)
+    if (bad and target == "seat") or draw(st.integers(0, 3)) == 0:
+        args.append("--seat={dir}/seat.json")
+    if draw(st.integers(0, 4)) == 0:
+        args.append("--coherence=" + draw(st.sampled_from(["uniform", "class"] + (["none"] if bad else []))))
+    if draw(st.integers(0, 4)) == 0:
+        broken = ["{dir}/out/saved.txt", "{dir}/out", "{dir}/out/.keep/r.csv"] if bad else []
+        args.append("--save-road=" + draw(st.sampled_from(["{dir}/out/saved.csv", "{dir}/new/saved.CRG"] + broken)))
     if draw(st.booleans()):
         args.append("--json")
     args += _png(draw, bad)
@@ -421,8 +486,8 @@ def ride_cases(draw) -> Case:
 
 
 def _ride_ok(where, argv, folder, new, stdout) -> None:
-    plot, ssp = _option(argv, "--plot"), _option(argv, "--ssp")
-    expected = {Path(plot)} if plot else set()
+    plot, ssp, road = _option(argv, "--plot"), _option(argv, "--ssp"), _option(argv, "--save-road")
+    expected = {Path(p) for p in (plot, road) if p}
     if ssp:
         expected |= set(Path(ssp).glob("*.ssp"))
         if not any(Path(ssp).glob("*.ssp")):
@@ -568,12 +633,44 @@ def _map_ok(where, argv, folder, new, stdout) -> None:
         raise FuzzFailure(f"{where}: printed tires {list(printed['tires'])}, wrote {list(doc['tires'])}")
 
 
-_SUCCESS.update({"static": _static_ok, "comfort": _comfort_ok, "ride": _ride_ok, "ssp": _ssp_ok, "map": _map_ok})
+@st.composite
+def seat_cases(draw) -> Case:
+    """``seat [PARAMS.json]`` of a mutated seat (or the valid one, or none) with mutated options; floor records
+    of 10 s (the shortest allowed) keep a case cheap."""
+    kind = draw(st.sampled_from(["mutated", "mutated", "valid", "none"]))
+    files = _files(**{"seat.json": draw(json_file("seat.json")) if kind == "mutated" else command_files()["seat.json"]})
+    args = [] if kind == "none" else ["{dir}/seat.json"]
+    bad = kind != "mutated" and draw(st.booleans())
+    durations = ["9.99", "3601", "nan", "-10", "x"] if bad and draw(st.booleans()) else ["10", "10", "12"]
+    args.append("--duration-s=" + draw(st.sampled_from(durations)))
+    klass = draw(st.sampled_from([None, "I", "ii", "3"] + (["IV", "0", ""] if bad else [])))
+    if klass is not None or kind != "none":     # (the three classes of 10 s each when no class is named)
+        args.append("--class=" + (klass if klass is not None else "I"))
+    if draw(st.integers(0, 3)) == 0:
+        args.append("--seed=" + draw(st.sampled_from(["0", "7"] + (["-1", "x"] if bad else []))))
+    if draw(st.booleans()):
+        args.append("--json")
+    return Case("seat", files, args)
+
+
+def _seat_ok(where, argv, folder, new, stdout) -> None:
+    _check_written(where, folder, new, set())
+    doc = _json_or_text(where, stdout, "--json" in argv)
+    if doc is None:
+        return
+    for row in doc["classes"]:
+        values = [row[key] for key in ("floor_a_w", "seat_a_w", "seat_factor", "seat_factor_linear")]
+        if not all(math.isfinite(v) and v >= 0 for v in values):
+            raise FuzzFailure(f"{where}: class {row['class']}: {values!r}")
+
+
+_SUCCESS.update({"static": _static_ok, "comfort": _comfort_ok, "ride": _ride_ok, "ssp": _ssp_ok, "map": _map_ok,
+                 "seat": _seat_ok})
 
 #: Every strategy of this module, by test name.
 COMMAND_STRATEGIES = {"static": static_cases, "comfort": comfort_cases, "ride": ride_cases, "ssp": ssp_cases,
                       "simulate_body": simulate_body_cases, "export_diagnosis": export_diagnosis_cases,
-                      "map": map_cases}
+                      "map": map_cases, "seat": seat_cases}
 
 
 @settings(CI, max_examples=scaled(80))
@@ -618,6 +715,12 @@ def test_map(case):
     check_case(case)
 
 
+@settings(CI, max_examples=scaled(60))
+@given(case=seat_cases())
+def test_seat(case):
+    check_case(case)
+
+
 # ----------------------------------------------------------------------------- special files
 
 #: (command, the file that is replaced, arguments): every file type each command reads.
@@ -645,6 +748,13 @@ _ROLES = [
                                "--duration-s=10", "--realisations=1"]),
     ("ride", "fmus/run_RL.fmu", ["{dir}/run.csv", "--body={dir}/diag.json", "--compare=fmu={dir}/fmus",
                                  "--duration-s=10", "--realisations=1"]),
+    ("ride", "road.csv", ["{dir}/run.csv", "--body={dir}/diag.json", "--road-file={dir}/road.csv",
+                          "--duration-s=10", "--realisations=1"]),
+    ("ride", "road.crg", ["{dir}/run.csv", "--body={dir}/diag.json", "--road-file={dir}/road.crg",
+                          "--duration-s=10", "--realisations=1"]),
+    ("ride", "seat.json", ["{dir}/run.csv", "--body={dir}/diag.json", "--seat={dir}/seat.json",
+                           "--duration-s=10", "--realisations=1"]),
+    ("seat", "seat.json", ["{dir}/seat.json", "--duration-s=10"]),
     ("static", "comp.csv", ["{dir}/comp.csv"]),
     ("comfort", "run.csv", ["{dir}/run.csv"]),
     ("map", "summary.json", ["{dir}/summary.json", "-o", "{dir}/map"]),
@@ -661,7 +771,7 @@ def test_special_file_in_place_of_an_input(command, role, args, kind):
     its inputs: one line, exit 2, within seconds (a FIFO opened for reading would wait for ever, /dev/zero
     read to its end fills memory)."""
     files = _files("run.csv", "run.json", "diag.json", "summary.json", "params4.json", "tire_map.json", "comp.csv",
-                   "fmus", **{role: Special(kind)})
+                   "fmus", "road.csv", "road.crg", "seat.json", **{role: Special(kind)})
 
     def hung(signum, frame):
         raise FuzzFailure(f"{command} with {role} a {kind}: no answer within 60 s")
@@ -689,9 +799,10 @@ _COMMANDS = {
     "static": (["static", "{dir}/comp.csv", "--plot={dir}/out/s.png"], True),
     "comfort": (["comfort", "{dir}/run.csv", "--bands", "--plot={dir}/out/c.png"], True),
     "ride": (["ride", "{dir}/run.csv", "--body={dir}/diag.json", "--duration-s=10", "--realisations=1",
-              "--compare=final", "--workers=1", "--plot={dir}/out/r.png"], True),
+              "--compare=final", "--workers=1", "--plot={dir}/out/r.png", "--save-road={dir}/out/road.csv"], True),
     "ssp": (["ssp", "{dir}/fmus", "{dir}/run.csv", "--body={dir}/diag.json", "-o", "{dir}/out/x.ssp"], True),
     "map": (["map", "{dir}/summary.json", "-o", "{dir}/out/map", "--platforms=linux64"], True),
+    "seat": (["seat", "{dir}/seat.json", "--duration-s=10", "--class=I"], False),
 }
 #: The costly commands' stdout and disk cases run in CI's fuzz step (CLEATFMU_FUZZ_SCALE >= 2), not by default.
 _COSTLY = {"diagnose", "ride", "ssp", "simulate"}
@@ -701,7 +812,8 @@ _MODES = ["dev_full", "closed", "closed_pipe", "file_size"]
 def _subprocess_case(command: str, mode: str, folder: Path):
     """Run `command`'s valid line in `folder` (its inputs written there) with stdout broken as `mode`."""
     argv, _ = _COMMANDS[command]
-    inputs = _files("run.csv", "run.json", "diag.json", "summary.json", "params4.json", "comp.csv", "fmus")
+    inputs = _files("run.csv", "run.json", "diag.json", "summary.json", "params4.json", "comp.csv", "fmus",
+                    "seat.json")
     del inputs["out/.keep"]
     for name, data in inputs.items():
         (folder / name).parent.mkdir(parents=True, exist_ok=True)
@@ -904,3 +1016,18 @@ def test_comfort_axes_with_a_plot_is_refused():
     case = Case("comfort", _files("run.csv"), ["{dir}/run.csv", "--axes=FL,FR,RL", "--plot={dir}/out/p.png"])
     assert check_case(case, details) == "error"
     assert details["message"] == "cleatfmu: error: --plot: does not apply with --axes", details
+
+
+@pytest.mark.parametrize("command", ["seat", "ride"])
+def test_a_seat_number_beyond_the_float_range_is_refused(command):
+    """A seat file whose mass is an integer of 400 digits was an OverflowError traceback (``seat``,
+    ``ride --seat``)."""
+    doc = json.loads(command_files()["seat.json"])
+    doc["mass_kg"] = _Raw("9" * 400)
+    files = _files("run.csv", "run.json", "diag.json", **{"seat.json": dumps_raw(doc)})
+    args = {"seat": ["{dir}/seat.json", "--duration-s=10", "--class=I"],
+            "ride": ["{dir}/run.csv", "--body={dir}/diag.json", "--seat={dir}/seat.json", "--compare=final",
+                     "--duration-s=10", "--realisations=1", "--workers=1"]}[command]
+    details = {}
+    assert check_case(Case(command, files, args), details) == "error"
+    assert details["message"].startswith("cleatfmu: error: {dir}/seat.json: mass_kg: a number far beyond"), details
