@@ -1031,3 +1031,32 @@ def test_a_seat_number_beyond_the_float_range_is_refused(command):
     details = {}
     assert check_case(Case(command, files, args), details) == "error"
     assert details["message"].startswith("cleatfmu: error: {dir}/seat.json: mass_kg: a number far beyond"), details
+
+
+def test_ride_on_a_road_file_with_a_seat_prints_its_table():
+    """``ride --road-file ROAD.csv --seat SEAT.json`` (text) was a TypeError traceback: a road file has no PSD,
+    so no linear seat factor from it, and the table formatted that None as a number."""
+    args = ["{dir}/run.csv", "--body={dir}/diag.json", "--compare=final", "--workers=1", "--duration-s=10",
+            "--realisations=1", "--road-file={dir}/road.csv", "--seat={dir}/seat.json"]
+    assert check_case(Case("ride", _files("run.csv", "run.json", "diag.json", "road.csv", "seat.json"), args)) \
+        == "valid"
+
+
+def test_a_saved_road_that_cannot_be_written_names_the_file(monkeypatch, tmp_path):
+    """On a full disk ``ride --save-road OUT.csv`` said ``stdout: cannot write: File too large``."""
+    import errno
+
+    from identification.comfort import road_files
+    from identification.errors import InputError
+
+    def full(files):
+        raise OSError(errno.EFBIG, os.strerror(errno.EFBIG))
+
+    source = tmp_path / "r.csv"
+    source.write_bytes(command_files()["road.csv"])
+    road = road_files.read_road(source)
+    monkeypatch.setattr(road_files, "atomic_write_texts", full)
+    for name in ("out.csv", "out.crg"):
+        with pytest.raises(InputError) as info:
+            road_files.write_road(road, tmp_path / name)
+        assert info.value.one_line() == f"{tmp_path / name}: cannot write: File too large"
