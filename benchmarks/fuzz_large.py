@@ -34,7 +34,7 @@ STRATEGIES = {**test_fuzz.ALL_STRATEGIES, **test_fuzz_commands.COMMAND_STRATEGIE
 #: co-simulation or the rig: fewer of them).
 WEIGHTS = {"recording": 0.30, "sidecar": 0.20, "identify_options": 0.12, "params": 0.13, "export_options": 0.06,
            "diagnose": 0.05, "simulate": 0.06, "rig": 0.08, "static": 0.10, "comfort": 0.10, "ride": 0.03,
-           "ssp": 0.03, "simulate_body": 0.03, "export_diagnosis": 0.04, "map": 0.05}
+           "ssp": 0.03, "simulate_body": 0.03, "export_diagnosis": 0.04, "map": 0.05, "seat": 0.04}
 
 
 def _message_kind(message: str) -> str:

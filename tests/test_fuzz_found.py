@@ -192,3 +192,40 @@ def test_a_saved_road_that_cannot_be_written_names_the_file(monkeypatch, tmp_pat
         with pytest.raises(InputError) as info:
             road_files.write_road(road, tmp_path / name)
         assert info.value.one_line() == f"{tmp_path / name}: cannot write: File too large"
+
+
+def test_a_compression_test_of_no_measurable_deformation_is_refused():
+    """Deformations of 1e-290 mm passed every check, then their squares underflowed to 0: a ZeroDivisionError
+    traceback in the fit."""
+    lines = command_files()["comp.csv"].decode().splitlines()
+    for i in range(2, len(lines)):
+        cells = lines[i].split(",")
+        cells[1] = repr(float(cells[1]) * 1e-288)
+        lines[i] = ",".join(cells)
+    details = {}
+    case = Case("static", _files(**{"comp.csv": "\n".join(lines).encode() + b"\n"}), ["{dir}/comp.csv"])
+    assert check_case(case, details) == "error"
+    assert "on the loading branch: less than 1e-09 m, no compression test" in details["message"], details
+
+
+@pytest.mark.parametrize("command", ["simulate", "ride"])
+def test_a_body_number_beyond_the_float_range_is_refused(command):
+    """An arrival time of 400 digits in a ``diagnose --json`` document was an OverflowError traceback in the
+    body reader of ``simulate --body``, ``ssp`` and ``ride --body``."""
+    doc = json.loads(command_files()["diag.json"])
+    doc["tires"]["RL"]["parameters"]["arrival"]["value"] = _Raw("1" * 400)
+    files = _files("run.csv", "run.json", "fmus", **{"diag.json": dumps_raw(doc)})
+    args = {"simulate": ["{dir}/fmus", "{dir}/run.csv", "--body={dir}/diag.json"],
+            "ride": ["{dir}/run.csv", "--body={dir}/diag.json", "--compare=final", "--duration-s=10",
+                     "--realisations=1", "--workers=1"]}[command]
+    details = {}
+    assert check_case(Case(command, files, args), details) == "error"
+    assert details["message"] == ("cleatfmu: error: {dir}/diag.json: tires.RL.parameters.arrival.value must be a "
+                                  "finite number, got an integer of 400 digits"), details
+
+
+def test_ssp_to_a_name_in_capitals():
+    """``ssp ... -o X.SSP`` (the option takes the suffix in any case) failed with a message blaming the --body
+    file and naming a temporary file: the archive was staged under the given name, which its writer refuses."""
+    args = ["{dir}/fmus", "{dir}/run.csv", "--body={dir}/diag.json", "--output={dir}/out/X.SSP"]
+    assert check_case(Case("ssp", _files("run.csv", "run.json", "diag.json", "fmus"), args)) == "valid"

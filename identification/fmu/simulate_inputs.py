@@ -84,7 +84,12 @@ def _key(doc, keys: str, source):
 
 
 def _number(value, keys: str, source) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    try:
+        finite = not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+    except OverflowError:                # an integer beyond the float range
+        raise InputError(source, f"{keys} must be a finite number, got an integer of {len(str(value))} digits") \
+            from None
+    if not finite:
         raise InputError(source, f"{keys} must be a finite number, got {value!r}")
     return float(value)
 

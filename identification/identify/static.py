@@ -45,6 +45,8 @@ MIN_POINTS = 3
 #: Largest deformation (m) and force (N) a compression test's cell may hold: beyond any tire, far within the fit's
 #: floating-point range.
 _BOUND_M, _BOUND_N = 100.0, 1e9
+#: Smallest rise of the deformation on a loading branch, m.
+_RESOLUTION_M = 1e-9
 #: Accepted column names (lower case) and their factor to SI.
 _DEFORMATION = {"deformation_m": 1.0, "deformation_mm": 1e-3}
 _FORCE = {"force_n": 1.0, "force_kn": 1e3}
@@ -295,6 +297,9 @@ def static_stiffness(deformation_m, force_N, *, source: str = "compression test"
                                  "loading branch")
     first, stop = branch
     x, y = d[first:stop], f[first:stop]
+    if not np.ptp(x) > _RESOLUTION_M:     # (a range of 1e-290 m: its squares underflow to 0)
+        raise InputError(source, f"the deformation rises by {np.ptp(x):.3g} m on the loading branch: less than "
+                                 f"{_RESOLUTION_M:g} m, no compression test")
     k, intercept, se, ssr = _line_fit(x, y)
     if not k > 0:
         raise InputError(source, f"the force does not increase with the deformation on the loading branch "
