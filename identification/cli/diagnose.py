@@ -130,11 +130,11 @@ def run(args) -> int:
     long = long or rec.decimated_from_hz is not None
     keep_fmus = args.fmu is not None or args.fmu_dir is not None
     announce_compilation()
-    with contextlib.ExitStack() as stack:
-        new_dir = None
-        if args.fmu_dir is not None:     # the folder as one set: the earlier FMUs or the new ones, never a mix
-            from .._folders import FolderSet
-            new_dir = stack.enter_context(FolderSet(args.fmu_dir, keep_existing=True))
+    from .._folders import FolderSet
+    # --fmu-dir as one set: the earlier FMUs or the new ones, never a mix (a plain `with`: an interrupt that
+    # ends __enter__ leaves nothing, one after it reaches __exit__)
+    with FolderSet(args.fmu_dir, keep_existing=True) if args.fmu_dir is not None else contextlib.nullcontext() \
+            as new_dir:
         diag, gain, files = _diagnose_into(args, rec, tire, long, keep_fmus, new_dir)
         write_files(files)
     if args.json:

@@ -162,11 +162,9 @@ def run(args) -> int:
                                          f"{args.duration_s:g} s); shorten --duration-s")
     from .util import announce_compilation
     announce_compilation()
-    with contextlib.ExitStack() as stack:
-        ssp_dir = None      # --ssp DIR as one set: the earlier systems or the new ones, its other files kept
-        if args.ssp is not None:
-            from .._folders import FolderSet
-            ssp_dir = stack.enter_context(FolderSet(args.ssp, keep_existing=True))
+    from .._folders import FolderSet
+    # --ssp DIR as one set: the earlier systems or the new ones, its other files kept
+    with FolderSet(args.ssp, keep_existing=True) if args.ssp is not None else contextlib.nullcontext() as ssp_dir:
         runs, doc = ride_comparison(rec, names, road_class=args.road, seed=args.seed,
                                     speed_m_s=None if args.speed_kmh is None else args.speed_kmh / 3.6,
                                     duration_s=args.duration_s, seat_x_m=args.seat_x_m, seat_y=args.seat_y,
