@@ -1,4 +1,5 @@
-"""A large run of the command-line fuzz suite (the strategies and property of ``tests/test_fuzz.py``).
+"""A large run of the command-line fuzz suite (the strategies of ``tests/test_fuzz.py`` and
+``tests/test_fuzz_commands.py``, the property of the first).
 
 Each generated case must end in a valid result (exit 0) or in one line
 ``cleatfmu: error: <file or option>: <problem>`` with exit status 2 and no file
@@ -24,11 +25,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from hypothesis import HealthCheck, Phase, given, seed, settings  # noqa: E402
 
 import test_fuzz  # noqa: E402
+import test_fuzz_commands  # noqa: E402
+
+#: Every strategy, by name.
+STRATEGIES = {**test_fuzz.ALL_STRATEGIES, **test_fuzz_commands.COMMAND_STRATEGIES}
 
 #: Share of the cases per strategy (export builds an FMU per valid case, diagnose, simulate and rig run a fit, a
 #: co-simulation or the rig: fewer of them).
 WEIGHTS = {"recording": 0.30, "sidecar": 0.20, "identify_options": 0.12, "params": 0.13, "export_options": 0.06,
-           "diagnose": 0.05, "simulate": 0.06, "rig": 0.08}
+           "diagnose": 0.05, "simulate": 0.06, "rig": 0.08, "static": 0.10, "comfort": 0.10, "ride": 0.03,
+           "ssp": 0.03, "simulate_body": 0.03, "export_diagnosis": 0.04, "map": 0.05, "seat": 0.04}
 
 
 def _message_kind(message: str) -> str:
@@ -46,7 +52,7 @@ def run_strategy(name: str, examples: int, seed_value: int, keep: int = 3) -> di
     @seed(seed_value)
     @settings(max_examples=examples, deadline=None, database=None, phases=[Phase.generate],
               suppress_health_check=list(HealthCheck))
-    @given(case=test_fuzz.ALL_STRATEGIES[name]())
+    @given(case=STRATEGIES[name]())
     def run(case):
         details: dict = {}
         try:

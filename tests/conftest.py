@@ -114,3 +114,45 @@ def chromium() -> str:
     if not found:
         pytest.skip("chromium is not installed (CI installs Debian's chromium with .ci/setup-debian, as root)")
     return found
+
+
+# ----------------------------------------------------------------------------- fuzz case count
+
+#: Cases of the fuzz suites run in this session (summed from the test reports, workers' included).
+_fuzz_cases = [0]
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_call(item):
+    """Attach the number of fuzz cases a test ran (``test_fuzz.CASES``) to its report."""
+    import sys
+
+    def count():
+        module = sys.modules.get("test_fuzz")
+        return module.CASES[0] if module is not None else 0
+
+    before = count()
+    yield
+    if count() > before:
+        item.user_properties.append(("fuzz_cases", count() - before))
+
+
+def pytest_runtest_logreport(report):
+    if report.when == "call":
+        _fuzz_cases[0] += sum(value for key, value in report.user_properties if key == "fuzz_cases")
+
+
+def pytest_terminal_summary(terminalreporter):
+    if _fuzz_cases[0]:
+        terminalreporter.write_line(f"fuzz cases run: {_fuzz_cases[0]}")
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """``CLEATFMU_FUZZ_MIN_CASES=N``: the session fails unless at least N fuzz cases ran (CI's fuzz step)."""
+    import os
+
+    minimum = os.environ.get("CLEATFMU_FUZZ_MIN_CASES")
+    if minimum and not hasattr(session.config, "workerinput") and _fuzz_cases[0] < int(minimum):
+        session.config.get_terminal_writer().line(
+            f"fuzz cases run: {_fuzz_cases[0]}, fewer than CLEATFMU_FUZZ_MIN_CASES={minimum}", red=True)
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED

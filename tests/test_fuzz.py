@@ -20,8 +20,11 @@ command-line options of ``identify``, ``export``, ``diagnose``, ``simulate``
 and ``rig``).  ``diagnose`` runs with one worker and ``rig`` from a short,
 low-rate run, so that a case costs a fraction of a second.
 
-The CI run is bounded (a few hundred cases, seconds); a larger run with the
-same strategies is ``benchmarks/fuzz_large.py``.
+The default run is bounded (a few hundred cases, seconds); ``CLEATFMU_FUZZ_SCALE=N``
+multiplies every strategy's number of cases (CI's fuzz step), and a larger run
+with the same strategies is ``benchmarks/fuzz_large.py``.  The other commands
+and file types are fuzzed by ``tests/test_fuzz_commands.py`` with this
+module's property (:func:`check_case`).
 """
 
 from __future__ import annotations
@@ -46,9 +49,26 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-__all__ = ["FuzzFailure", "Case", "recording_cases", "sidecar_cases", "identify_option_cases",
+__all__ = ["FuzzFailure", "Case", "Special", "scaled", "CASES",
+           "recording_cases", "sidecar_cases", "identify_option_cases",
            "params_cases", "export_option_cases", "diagnose_cases", "simulate_cases", "rig_cases", "ALL_STRATEGIES",
            "check_case"]
+
+#: Cases run by :func:`check_case` in this process (``tests/conftest.py`` adds them up per test).
+CASES = [0]
+
+
+def scaled(examples: int) -> int:
+    """`examples` times ``CLEATFMU_FUZZ_SCALE`` (a positive number, default 1): CI's fuzz step runs more cases."""
+    text = os.environ.get("CLEATFMU_FUZZ_SCALE", "1")
+    try:
+        factor = float(text)
+    except ValueError:
+        raise ValueError(f"CLEATFMU_FUZZ_SCALE must be a number, got {text!r}") from None
+    if not (math.isfinite(factor) and factor > 0):
+        raise ValueError(f"CLEATFMU_FUZZ_SCALE must be > 0, got {text!r}")
+    return max(1, round(examples * factor))
+
 
 # ----------------------------------------------------------------------------- valid starting points
 
@@ -122,6 +142,28 @@ class Case:
     def argv(self, folder: Path) -> list[str]:
         """The full argument list, in `folder`."""
         return [self.command] + [a.replace("{dir}", str(folder)) for a in self.args]
+
+
+class Special(str):
+    """A file of a case that is no regular file: ``fifo``, ``dev_zero`` (a symlink to /dev/zero), ``dir`` (an
+    empty folder), ``dangling`` (a symlink to nothing), ``unreadable`` (mode 000; readable anyway by root)."""
+
+    KINDS = ("fifo", "dev_zero", "dir", "dangling", "unreadable")
+
+    def make(self, path: Path) -> None:
+        if self == "fifo":
+            os.mkfifo(path)
+        elif self == "dev_zero":
+            path.symlink_to("/dev/zero")
+        elif self == "dir":
+            path.mkdir()
+        elif self == "dangling":
+            path.symlink_to(path.parent / "nothing-here")
+        elif self == "unreadable":
+            path.write_bytes(b"time,FL\n")
+            path.chmod(0)
+        else:
+            raise ValueError(f"unknown special file {self!r}")
 
 
 class FuzzFailure(AssertionError):
@@ -612,8 +654,9 @@ def _run(argv: list[str]) -> tuple[int | None, str, str, str | None]:
     out, err = io.StringIO(), io.StringIO()
     status, tb = None, None
     with tempfile.TemporaryFile() as sink:
+        # record=True: under pytest, which records warnings itself, a shown warning would go to its list
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), _native_output(sink), \
-                warnings.catch_warnings():
+                warnings.catch_warnings(record=True) as caught:
             warnings.resetwarnings()
             warnings.simplefilter("default")
             try:
@@ -624,7 +667,8 @@ def _run(argv: list[str]) -> tuple[int | None, str, str, str | None]:
                 tb = traceback.format_exc()
         sink.seek(0)
         native = sink.read().decode("utf-8", "replace")
-    return status, out.getvalue(), err.getvalue() + native, tb
+    shown = "".join(warnings.formatwarning(w.message, w.category, w.filename, w.lineno, w.line) for w in caught)
+    return status, out.getvalue(), err.getvalue() + shown + native, tb
 
 
 def _check_identify_output(stdout: str, as_json: bool) -> None:
@@ -640,6 +684,10 @@ def _check_identify_output(stdout: str, as_json: bool) -> None:
     if not doc["tires"]:
         raise FuzzFailure("identify --json succeeded with no tire")
     for name, entry in doc["tires"].items():
+        if "refused" in entry:   # the method refused the channel: the waveform fit of the decay there is, if any
+            if entry["fallback"] is None:
+                continue
+            entry = entry["fallback"]
         k, c = entry["k"], entry["c"]
         if not (math.isfinite(k) and k > 0 and math.isfinite(c) and c >= 0):
             raise FuzzFailure(f"identify --json: tire {name}: k = {k!r}, c = {c!r}")
@@ -716,8 +764,9 @@ def _simulate_ok(where, argv, folder, new, stdout) -> None:
     plot = _option(argv, "--plot")
     _check_written(where, folder, new, {Path(plot)} if plot else set())
     doc = _json_or_text(where, stdout, "--json" in argv)
-    if doc is not None and not (math.isfinite(doc["nrmse"]) and doc["nrmse"] >= 0):
-        raise FuzzFailure(f"{where}: nrmse = {doc['nrmse']!r}")
+    for name, entry in ({} if doc is None else doc["tires"] if "tires" in doc else {"": doc}).items():
+        if not (math.isfinite(entry["nrmse"]) and entry["nrmse"] >= 0):    # one tire, or the four under a body
+            raise FuzzFailure(f"{where}: {name} nrmse = {entry['nrmse']!r}")
 
 
 def _rig_ok(where, argv, folder, new, stdout) -> None:
@@ -762,11 +811,15 @@ def check_case(case: Case, details: dict | None = None) -> str:
         for name, data in case.files.items():
             path = folder / name
             path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_bytes(data)
+            if isinstance(data, Special):
+                data.make(path)
+            else:
+                path.write_bytes(data)
         stage = folder / "tmp"  # the process's temporary folder during the run: it must stay empty
         stage.mkdir()
         before = _listing(folder)
         argv = case.argv(folder)
+        CASES[0] += 1
         saved = tempfile.tempdir
         tempfile.tempdir = str(stage)
         try:
@@ -806,49 +859,49 @@ CI = settings(deadline=None, derandomize=True, database=None, print_blob=True,
                                      HealthCheck.filter_too_much, HealthCheck.large_base_example])
 
 
-@settings(CI, max_examples=300)
+@settings(CI, max_examples=scaled(300))
 @given(case=recording_cases())
 def test_identify_mutated_csv(case):
     check_case(case)
 
 
-@settings(CI, max_examples=200)
+@settings(CI, max_examples=scaled(200))
 @given(case=sidecar_cases())
 def test_identify_mutated_sidecar(case):
     check_case(case)
 
 
-@settings(CI, max_examples=120)
+@settings(CI, max_examples=scaled(120))
 @given(case=identify_option_cases())
 def test_identify_options(case):
     check_case(case)
 
 
-@settings(CI, max_examples=150)
+@settings(CI, max_examples=scaled(150))
 @given(case=params_cases())
 def test_export_mutated_params(case):
     check_case(case)
 
 
-@settings(CI, max_examples=80)
+@settings(CI, max_examples=scaled(80))
 @given(case=export_option_cases())
 def test_export_options(case):
     check_case(case)
 
 
-@settings(CI, max_examples=40)
+@settings(CI, max_examples=scaled(40))
 @given(case=diagnose_cases())
 def test_diagnose_options(case):
     check_case(case)
 
 
-@settings(CI, max_examples=60)
+@settings(CI, max_examples=scaled(60))
 @given(case=simulate_cases())
 def test_simulate_options(case):
     check_case(case)
 
 
-@settings(CI, max_examples=100)
+@settings(CI, max_examples=scaled(100))
 @given(case=rig_cases())
 def test_rig_options(case):
     check_case(case)

@@ -30,6 +30,7 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 from test_fmu_lifecycle import _counting_callbacks, _open, _to_mode  # noqa: E402
+from test_fuzz import CASES, scaled  # noqa: E402
 
 #: Values a careless or hostile importer sends.
 SPECIAL = [0.0, -0.0, 1e-320, -1e-320, 1e-300, 1e308, -1e308, math.inf, -math.inf, math.nan, 1.0, -1.0]
@@ -37,7 +38,7 @@ VALUES = st.one_of(st.sampled_from(SPECIAL), st.floats(allow_nan=True, allow_inf
                    st.floats(-1e7, 1e7))
 STEPS = st.one_of(st.sampled_from([0.0, -1e-3, 1e-3, 1e-6, 0.5, 10.0, 1e300, math.nan, math.inf]),
                   st.floats(1e-6, 0.05))
-CI = settings(deadline=None, derandomize=True, database=None, print_blob=True, max_examples=150,
+CI = settings(deadline=None, derandomize=True, database=None, print_blob=True, max_examples=scaled(150),
               suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
 
@@ -162,9 +163,10 @@ def test_any_inputs_and_parameters_succeed_or_fail_cleanly(loaded, kind):
     @given(ops=_operations(fmu))
     def case(ops):
         tally["cases"] += 1
+        CASES[0] += 1
         _run(fmu, ops, tally)
         _clean_run_works(fmu)
 
     case()
     # the cases went both ways: accepted and refused values, steps taken and refused
-    assert tally["cases"] >= 150 and min(tally.values()) >= 20, tally
+    assert tally["cases"] >= scaled(150) and min(tally.values()) >= 20, tally

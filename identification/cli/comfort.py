@@ -218,6 +218,8 @@ def _three_axes(args) -> int:
         raise InputError("--axes", f"three different column names X,Y,Z expected, got {args.axes!r}")
     if args.column is not None:
         raise InputError("--column", "does not apply with --axes")
+    if args.plot is not None:            # (the band spectra are of one weighting's columns)
+        raise InputError("--plot", "does not apply with --axes")
     exposure_h = _exposure_h(args.exposure_h, "Wk")
     names, fs, columns = read_acceleration_csv(args.acc)
     missing = [c for c in cols if c not in names]

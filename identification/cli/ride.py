@@ -320,8 +320,10 @@ def format_seat(doc: dict, source: str = "") -> str:
                  f"{iso['seat_factor_linear']:.3f}), end-stop hits {iso['end_stops']['hits']}")
     for name, entry in doc["sets"].items():
         e = entry["expected"]
+        linear = e["psd"]["seat_factor_linear"]      # None on a road file (no PSD)
+        linear = "none" if linear is None else f"{linear:.3f}"
         lines.append(f"{name}: seat {e['a_w']['mean']:.3f}, floor {e['floor_a_w']['mean']:.3f}, SEAT "
                      f"{e['seat_factor']['mean']:.3f} (linear seat from the road PSD "
-                     f"{e['psd']['seat_factor_linear']:.3f}), end-stop hits {e['end_stop_hits']['mean']:.3g} per "
+                     f"{linear}), end-stop hits {e['end_stop_hits']['mean']:.3g} per "
                      f"ride ({e['end_stop_share']['mean']:.2%} of the time)")
     return "\n".join(lines)

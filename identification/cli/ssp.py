@@ -61,7 +61,7 @@ def run(args) -> int:
     import tempfile
 
     with tempfile.TemporaryDirectory(prefix="cleatfmu_ssp_") as tmp:
-        staged = Path(tmp) / Path(args.output).name
+        staged = Path(tmp) / (Path(args.output).stem + ".ssp")   # (the writer takes .ssp, the option any case)
         try:
             write_tractor_ssp(staged, record, start_s=start, stop_s=stop, step_s=h, seat_x_m=seat_x,
                               seat_y=args.seat_y, name=Path(args.output).stem,

@@ -137,8 +137,8 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
     seat_x = SEAT_X_FRACTION * body.wheelbase_m if seat_x_m is None else float(seat_x_m)
     settle_s = (RAMP_M + body.wheelbase_m) / speed_m_s
     if not duration_s > 2 * settle_s:
-        raise ValueError(f"duration_s must exceed twice the fade-in of both axles ({2 * settle_s:.3g} s at "
-                         f"{speed_m_s:g} m/s), got {duration_s!r}")
+        raise InputError("--duration-s", f"must exceed twice the fade-in of both axles ({2 * settle_s:.3g} s at "
+                                         f"{speed_m_s * 3.6:.3g} km/h), got {duration_s:g}")
     if road.x_m[-1] < speed_m_s * duration_s:
         raise ValueError(f"the road ({road.x_m[-1]:g} m) is shorter than the ride ({speed_m_s * duration_s:g} m)")
     if tires not in TIRE_MODES:

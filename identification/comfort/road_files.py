@@ -377,7 +377,10 @@ def write_road(road: RoadProfile, path) -> Path:
     suffix = Path(path).suffix.lower()
     if suffix not in (".csv", ".crg"):
         raise InputError(path, "a road file must end in .csv or .crg")
-    return write_road_csv(road, path) if suffix == ".csv" else write_road_crg(road, path)
+    try:
+        return write_road_csv(road, path) if suffix == ".csv" else write_road_crg(road, path)
+    except OSError as exc:               # (a full disk: the file's error, not stdout's)
+        raise InputError(path, f"cannot write: {exc.strerror or exc}") from None
 
 
 def read_road(path, *, track_width_m: float | None = None) -> RoadProfile:

@@ -125,8 +125,11 @@ class SeatModel:
 def _check_value(key: str, value, source) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise InputError(source, f"{key} must be a number, got {value!r}")
-    v = float(value)
     lo, hi = _RANGES[key]
+    try:
+        v = float(value)
+    except OverflowError:                # an integer beyond the float range
+        raise InputError(source, f"{key}: a number far beyond a seat's {lo:g} .. {hi:g}") from None
     if not (math.isfinite(v) and lo <= v <= hi):
         raise InputError(source, f"{key} = {value!r}: a seat's is {lo:g} .. {hi:g}")
     return v

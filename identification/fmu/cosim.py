@@ -111,7 +111,10 @@ class TireFmu:
                 self.slave = None
             shutil.rmtree(self._dir, ignore_errors=True)
             if isinstance(exc, Exception) and not isinstance(exc, InputError):
-                raise InputError(path, f"cannot instantiate the FMU here ({exc.__class__.__name__})") from None
+                why = exc.__class__.__name__
+                if isinstance(exc, OSError) and exc.strerror:      # e.g. a full disk while extracting it
+                    why += f": {exc.strerror}"
+                raise InputError(path, f"cannot instantiate the FMU here ({why})") from None
             raise
         self._initialized = False
         self._start_values = dict(start_values or {})

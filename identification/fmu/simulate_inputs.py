@@ -60,7 +60,7 @@ def tractor_fmu_paths(paths, *, recording: str | None = None) -> dict:
                              + "; ".join(problems))
         return {t: folder / found[t][0] for t in TIRES}
     if len(paths) != len(TIRES):
-        raise InputError(None, f"give one tire FMU, four (FL FR RL RR) or one directory holding them, "
+        raise InputError(paths[0], f"give one tire FMU, four (FL FR RL RR) or one directory holding them, "
                                f"got {len(paths)} path(s)")
     tags = [_tire_suffix(p) for p in paths]
     if sorted(t for t in tags if t) == sorted(TIRES):
@@ -84,7 +84,12 @@ def _key(doc, keys: str, source):
 
 
 def _number(value, keys: str, source) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    try:
+        finite = not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+    except OverflowError:                # an integer beyond the float range
+        raise InputError(source, f"{keys} must be a finite number, got an integer of {len(str(value))} digits") \
+            from None
+    if not finite:
         raise InputError(source, f"{keys} must be a finite number, got {value!r}")
     return float(value)
 

@@ -42,6 +42,11 @@ DEFAULT_SEGMENTS = 5
 #: Fewest points of a loading branch (and of each local-slope interval).
 MIN_POINTS = 3
 
+#: Largest deformation (m) and force (N) a compression test's cell may hold: beyond any tire, far within the fit's
+#: floating-point range.
+_BOUND_M, _BOUND_N = 100.0, 1e9
+#: Smallest rise of the deformation on a loading branch, m.
+_RESOLUTION_M = 1e-9
 #: Accepted column names (lower case) and their factor to SI.
 _DEFORMATION = {"deformation_m": 1.0, "deformation_mm": 1e-3}
 _FORCE = {"force_n": 1.0, "force_kn": 1e3}
@@ -205,7 +210,7 @@ def read_compression(path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         cells = line.split(sep)
         if len(cells) != len(header):
             raise InputError(path, f"line {lineno}: expected {len(header)} cells, found {len(cells)}")
-        for out, i in ((deformation, i_d), (force, i_f)):
+        for out, i, scale, bound in ((deformation, i_d, s_d, _BOUND_M), (force, i_f, s_f, _BOUND_N)):
             try:
                 value = parse_number(cells[i])
             except ValueError:
@@ -213,6 +218,9 @@ def read_compression(path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                     from None
             if not math.isfinite(value):
                 raise InputError(path, f"line {lineno}, column {header[i]}: non-finite value {cells[i].strip()}")
+            if abs(value * scale) > bound:      # (its square would overflow the fit)
+                raise InputError(path, f"line {lineno}, column {header[i]}: {cells[i].strip()} is beyond any "
+                                       f"compression test (|deformation| <= {_BOUND_M:g} m, |force| <= {_BOUND_N:g} N)")
             out[r] = value
     return deformation * s_d, force * s_f, np.array([n for n, _ in rows], dtype=int)
 
@@ -289,6 +297,9 @@ def static_stiffness(deformation_m, force_N, *, source: str = "compression test"
                                  "loading branch")
     first, stop = branch
     x, y = d[first:stop], f[first:stop]
+    if not np.ptp(x) > _RESOLUTION_M:     # (a range of 1e-290 m: its squares underflow to 0)
+        raise InputError(source, f"the deformation rises by {np.ptp(x):.3g} m on the loading branch: less than "
+                                 f"{_RESOLUTION_M:g} m, no compression test")
     k, intercept, se, ssr = _line_fit(x, y)
     if not k > 0:
         raise InputError(source, f"the force does not increase with the deformation on the loading branch "

@@ -48,9 +48,16 @@ def png_bytes(fig, dpi: int = 110) -> bytes:
 
 
 def save_png(fig, path, dpi: int = 110) -> Path:
-    """Write the figure to `path` (all or nothing); the figure is closed."""
+    """Write the figure to `path` (all or nothing); the figure is closed.  A file that cannot be written (a full
+    disk) is an InputError naming `path`, not an error of stdout."""
+    from ..errors import InputError
+
     path = Path(path)
-    atomic_write_bytes({path: png_bytes(fig, dpi)})
+    data = png_bytes(fig, dpi)
+    try:
+        atomic_write_bytes({path: data})
+    except OSError as exc:
+        raise InputError(path, f"cannot write: {exc.strerror or exc}") from None
     return path
 
 
@@ -239,7 +246,7 @@ def plot_ride(runs, *, road_class: str, speed_m_s: float, expected: dict | None 
         window = r.time_s < r.time_s[0] + 10.0
         ax.plot(r.time_s[window], r.seat_m_s2[window], lw=0.8, color=f"C{i}", label=name)
         e = (expected or {}).get(name)
-        if e is None:
+        if e is None or e["a_w"]["mean_interval"] is None:     # one road: no interval, its ride's a_w
             bx.bar(i, r.comfort.a_w, color=f"C{i}")
             continue
         a = e["a_w"]
@@ -252,8 +259,8 @@ def plot_ride(runs, *, road_class: str, speed_m_s: float, expected: dict | None 
     ax.legend(loc="upper right", fontsize=8)
     ax.set_title(f"ISO 8608 class {road_class} road, {speed_m_s * 3.6:.3g} km/h (the first road's first 10 s)")
     bx.set_xticks(range(len(runs)), list(runs), rotation=30, ha="right", fontsize=8)
-    if expected:
-        n = next(iter(expected.values()))["realisations"]
+    n = next(iter(expected.values()))["realisations"] if expected else 1
+    if n > 1:
         bx.set_title(f"expected over {n} roads (95 %);\n| one ride's 95 %, · first road", fontsize=8)
     bx.set_ylabel("a_w (Wk) / m/s²")
     fig.tight_layout()

@@ -40,9 +40,16 @@ def summary_path(item) -> Path:
     return path
 
 
+def _finite(x) -> bool:
+    """A finite number (no bool; an integer beyond the float range is none)."""
+    try:
+        return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+    except OverflowError:
+        return False
+
+
 def _interval(value) -> bool:
-    return (isinstance(value, (list, tuple)) and len(value) == 2
-            and all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in value))
+    return isinstance(value, (list, tuple)) and len(value) == 2 and all(_finite(x) for x in value)
 
 
 def runs_of_summary(path, *, pressure_kpa: float | None = None) -> list[dict]:
@@ -83,8 +90,8 @@ def runs_of_summary(path, *, pressure_kpa: float | None = None) -> list[dict]:
                    "wheel_load_N": (conditions.get("wheel_load_N") or {}).get(tire),
                    "inflation_pressure_Pa": pressures.get(tire), "conditional": bool(best.get("conditional"))}
             numbers = [run[key] for key in ("speed_m_s", "k", "c", "wheel_load_N")]
-            if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and x >= 0
-                       for x in numbers) or not (_interval(run["k_ci"]) and _interval(run["c_ci"])):
+            if not all(_finite(x) and x >= 0 for x in numbers) \
+                    or not (_interval(run["k_ci"]) and _interval(run["c_ci"])):
                 raise InputError(path, f"recording {run['recording']!r} tire {tire}: speed, k, c with intervals "
                                        f"and wheel load must be finite numbers")
             if pressure_kpa is not None and (run["inflation_pressure_Pa"] is None or
