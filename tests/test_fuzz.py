@@ -289,18 +289,23 @@ def csv_mutation(draw, lines: list[str]) -> list[str]:
     return lines
 
 
-@st.composite
-def csv_contents(draw) -> bytes:
-    """The base CSV with 1-3 mutations, or garbage."""
+def mutated_csv(draw, lines: list[str]) -> bytes:
+    """`lines` (a valid CSV) with 1-3 line mutations (cells, header, rows, time, separators) and a drawn line
+    end, or garbage (for a ``@st.composite`` strategy's `draw`)."""
     if draw(st.integers(0, 9)) == 0:
         return draw(garbage)
-    lines = _csv_lines()
     for _ in range(draw(st.integers(1, 3))):
         if len(lines) < 3:
             break
         lines = draw(csv_mutation(lines))
     end = draw(st.sampled_from(["\n", "\r\n", ""]))
     return (end or "\n").join(lines).encode("utf-8") + end.encode()
+
+
+@st.composite
+def csv_contents(draw) -> bytes:
+    """The base CSV with 1-3 mutations, or garbage."""
+    return mutated_csv(draw, _csv_lines())
 
 
 # ----------------------------------------------------------------------------- strategies: sidecar

@@ -45,7 +45,7 @@ from hypothesis import given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 from test_fuzz import (CI, Case, FuzzFailure, Special, _SUCCESS, _check_fmu, _check_written,  # noqa: E402
-                       _json_or_text, _option, check_case, csv_mutation, dumps_raw, garbage, huge_literals,
+                       _json_or_text, _option, check_case, mutated_csv, dumps_raw, garbage, huge_literals,
                        json_values, numbers, scaled)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -221,15 +221,7 @@ def _set(doc, path, value):
 @st.composite
 def csv_file(draw, name: str) -> bytes:
     """The valid CSV `name` with 1-3 line mutations (cells, header, rows, time, separators), or garbage."""
-    if draw(st.integers(0, 9)) == 0:
-        return draw(garbage)
-    lines = command_files()[name].decode().splitlines()
-    for _ in range(draw(st.integers(1, 3))):
-        if len(lines) < 3:
-            break
-        lines = draw(csv_mutation(lines))
-    end = draw(st.sampled_from(["\n", "\r\n", ""]))
-    return (end or "\n").join(lines).encode("utf-8") + end.encode()
+    return mutated_csv(draw, command_files()[name].decode().splitlines())
 
 
 @st.composite
