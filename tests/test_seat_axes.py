@@ -110,3 +110,25 @@ def test_ride_fore_aft_and_lateral_are_the_pitch_and_roll_at_the_seat_height():
     for a in "xyz":
         assert run.axes.axes[a].a_w == pytest.approx(hand.axes[a].a_w, rel=1e-9), a
     assert run.axes.axes["x"].a_w > 0.05 and run.axes.axes["y"].a_w > 0.05
+
+
+def test_comfort_axes_takes_its_mtvv_window_and_refuses_the_band_spectra(cli, tmp_path):
+    """A 0.5 s burst of an 8 Hz sine on z in a quiet 12 s record: a 0.5 s running RMS window holds the whole
+    burst, a 1 s window half burst and half quiet, so MTVV(0.5 s) / MTVV(1 s) = √2 (the weighting's few-ms
+    transients aside).  Before, --axes rated every axis with a 1 s window whatever --mtvv-window-s said, and
+    took --bands without giving them."""
+    fs = 400.0
+    t = np.arange(int(12 * fs)) / fs
+    z = np.where((t >= 6.0) & (t < 6.5), np.sin(2 * np.pi * 8.0 * t), 0.0)
+    quiet = 1e-3 * np.sin(2 * np.pi * 3.0 * t)
+    path = tmp_path / "burst.csv"
+    rows = (f"{a:.6f},{b:.9g},{b:.9g},{c:.9g}" for a, b, c in zip(t, quiet, z))
+    path.write_text("time,ax,ay,az\n" + "\n".join(rows) + "\n")
+    mtvv = {}
+    for tau in (0.5, 1.0):
+        res = cli("comfort", path, "--axes", "ax,ay,az", "--mtvv-window-s", str(tau), "--json")
+        assert res.code == 0, res.err
+        mtvv[tau] = json.loads(res.out)["axes"]["z"]["mtvv"]
+    assert mtvv[0.5] / mtvv[1.0] == pytest.approx(math.sqrt(2.0), rel=0.03)
+    bad = cli("comfort", path, "--axes", "ax,ay,az", "--bands")
+    assert bad.code == 2 and bad.err == "cleatfmu: error: --bands: does not apply with --axes\n", bad.err

@@ -218,17 +218,17 @@ def _three_axes(args) -> int:
         raise InputError("--axes", f"three different column names X,Y,Z expected, got {args.axes!r}")
     if args.column is not None:
         raise InputError("--column", "does not apply with --axes")
-    if args.plot is not None:            # (the band spectra are of one weighting's columns)
-        raise InputError("--plot", "does not apply with --axes")
+    if args.plot is not None or args.bands:      # (the band spectra are of one weighting's columns)
+        raise InputError("--plot" if args.plot is not None else "--bands", "does not apply with --axes")
     exposure_h = _exposure_h(args.exposure_h, "Wk")
-    names, fs, columns = read_acceleration_csv(args.acc)
+    names, fs, columns = read_acceleration_csv(args.acc, min_duration_s=args.mtvv_window_s)
     missing = [c for c in cols if c not in names]
     if missing:
         raise InputError("--axes", f"{args.acc} has no column {missing[0]!r} (columns: {', '.join(names)})")
     if fs < 160.0:
         raise InputError(args.acc, f"sampling rate {fs:.6g} Hz is too low for Wk and Wd: at least 160 Hz needed")
     try:
-        r = three_axis(*(columns[c] for c in cols), fs, exposure_h=exposure_h)
+        r = three_axis(*(columns[c] for c in cols), fs, exposure_h=exposure_h, tau_s=args.mtvv_window_s)
     except InputError as exc:
         raise InputError(args.acc, exc.problem) from None
     doc = {"file": str(args.acc), "columns": dict(zip(AXES, cols)), "sample_rate_hz": fs, **r.to_json()}
