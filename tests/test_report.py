@@ -263,6 +263,12 @@ def test_report_with_a_broken_recording(cli, tmp_path):
 def test_report_needs_recordings(cli, tmp_path):
     res = cli("report", tmp_path, "-o", tmp_path / "out")
     assert res.code == 2 and "no recording" in res.err
+    # a pipe named as a recording is refused as what it is (it was "no such file")
+    os.mkfifo(tmp_path / "pipe.csv")
+    res = cli("report", tmp_path / "pipe.csv", "-o", tmp_path / "out")
+    assert res.code == 2 and res.err == f"cleatfmu: error: {tmp_path / 'pipe.csv'}: is not a regular file (a pipe, " \
+                                        "a device or a socket)\n", res.err
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize("case", ["unreadable", "through a file", "interrupted"])

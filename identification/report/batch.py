@@ -118,8 +118,10 @@ def collect_recordings(items) -> list[Path]:
         p = Path(item)
         if p.is_dir():
             paths += sorted(q for q in p.glob("*.csv") if q.is_file())
-        elif p.exists():
+        elif p.is_file():
             paths.append(p)
+        elif p.exists():
+            raise InputError(p, "is not a regular file (a pipe, a device or a socket)")
         else:
             raise InputError(p, "no such file or directory")
     if not paths:
