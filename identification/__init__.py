@@ -33,7 +33,10 @@ def _defer_interrupt(signum, frame):
 
 
 _interrupted = 0
-if _started_as_the_program():
+#: Whether this process runs the command line as its program (told at the package's import, while
+#: ``python -m`` still shows as ``-m`` in ``sys.argv``).
+_AS_PROGRAM = _started_as_the_program()
+if _AS_PROGRAM:
     for _signum in (_signal.SIGINT, _signal.SIGTERM):
         if _signal.getsignal(_signum) in (_signal.default_int_handler, _signal.SIG_DFL):
             _signal.signal(_signum, _defer_interrupt)

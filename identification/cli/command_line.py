@@ -267,6 +267,35 @@ def _run(argv) -> int:
 
 
 def main(argv=None) -> int:
+    """Run the CLI; returns the exit status (:func:`_main`).
+
+    Run as the program (``cleatfmu``, ``python -m identification.cli``), an interrupted or terminated
+    command ends the process at once with 130 or 143 once its own clean-up is done (its output undone, its
+    workers stopped): the interpreter's shutdown would otherwise wait for the threads of a worker pool whose
+    workers were killed (seen: a ``diagnose --workers 2`` stopped by Ctrl-C hung after "interrupted"), and
+    re-raise a Ctrl-C that came during the imports as status -2.
+    """
+    status = _main(argv)
+    if status in (130, EXIT_TERMINATED):
+        import identification
+
+        if identification._AS_PROGRAM:
+            _end_now(status)
+    return status
+
+
+def _end_now(status: int) -> None:
+    """Flush what was written and end the process with `status`, skipping the interpreter's shutdown."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            if stream is not None:
+                stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(status)
+
+
+def _main(argv=None) -> int:
     """Run the CLI; returns the exit status.
 
     Parameters
