@@ -33,7 +33,7 @@ from pathlib import Path
 from .kinds import FmuKind, load_kind, module_source
 from .model_description import complete_model_description
 from .reproducible import GUID_PLACEHOLDER, content_guid, zip_bytes
-from identification._files import publish_path
+from identification._files import publish_path, temp_beside
 
 __all__ = ["BACKENDS", "build_fmu", "build_prefix", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
 
@@ -275,7 +275,7 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
                              resources)
     if resources:
         raise ValueError("resources are for native FMUs (the pythonfmu backend takes none)")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=".fmu.part", dir=dest.parent)
+    fd, tmp_name = temp_beside(dest, ".part")
     os.close(fd)
     tmp = Path(tmp_name)
     try:
@@ -334,7 +334,7 @@ def _build_native(k, dest: Path, starts, given, provenance, description, fmi_ver
         description = k.native.get("description") or f"cleatfmu {k.name} tire (native C), SI units"
     data = native_fmu_bytes(k, starts, description=description, version=project_version(), fmi_version=fmi_version,
                             platforms=platforms, provenance=provenance, resources=resources)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.stem}.", suffix=".fmu.part", dir=dest.parent)
+    fd, tmp_name = temp_beside(dest, ".part")
     tmp = Path(tmp_name)
     try:
         with os.fdopen(fd, "wb") as f:

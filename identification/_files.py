@@ -44,6 +44,58 @@ def json_text(doc, *, indent: int | None = 2, default=None) -> str:
                       default=None if default is None else (lambda o: finite_or_none(default(o))))
 
 
+def process_alive(pid: int) -> bool:
+    """Whether process `pid` exists (another user's counts as alive)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:                 # another user's process
+        return True
+    return True
+
+
+#: Suffixes of the temporaries written beside a file (:func:`temp_beside`).
+TEMP_SUFFIXES = (".tmp", ".part", ".previous")
+
+
+def temp_beside(path, suffix: str) -> tuple[int, str]:
+    """Open a new temporary file ``.NAME.PID-XXXXXXXX<suffix>`` in the folder of `path` (NAME its name, PID
+    this process's); return ``(fd, name)`` as :func:`tempfile.mkstemp` does.
+
+    A SIGKILL leaves such a file behind (nothing can remove it then); the temporaries of `path` whose process
+    is gone are removed first, so the next run that writes `path` clears what a killed one left.
+    """
+    path = Path(path)
+    clear_dead_temporaries(path)
+    return tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}-", suffix=suffix)
+
+
+def clear_dead_temporaries(path) -> list[Path]:
+    """Remove the temporaries (:func:`temp_beside`) of `path` left by processes that no longer exist; return
+    them."""
+    path = Path(path)
+    prefix = f".{path.name}."
+    removed = []
+    try:
+        entries = list(os.scandir(path.parent))
+    except OSError:
+        return removed
+    for entry in entries:
+        name = entry.name
+        if not (name.startswith(prefix) and name.endswith(TEMP_SUFFIXES)):
+            continue
+        pid, dash, _ = name[len(prefix):].partition("-")
+        if dash and pid.isdigit() and int(pid) != os.getpid() and not process_alive(int(pid)) \
+                and entry.is_file(follow_symlinks=False):
+            try:
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+            except FileNotFoundError:
+                pass
+    return removed
+
+
 def atomic_write_bytes(files: Mapping[Path, bytes]) -> None:
     """Write several files so that either all appear or none does.
 
@@ -56,7 +108,7 @@ def atomic_write_bytes(files: Mapping[Path, bytes]) -> None:
     try:
         for path, data in files.items():
             path = Path(path)
-            fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+            fd, name = temp_beside(path, ".tmp")
             tmp[path] = name
             with os.fdopen(fd, "wb") as fh:
                 fh.write(data)
@@ -291,7 +343,7 @@ def publish_path(finished, path) -> None:
     blocks = _blocks()
     backup = None
     if blocks and path.is_file():
-        fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".previous")
+        fd, name = temp_beside(path, ".previous")
         os.close(fd)
         os.unlink(name)
         try:

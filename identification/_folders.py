@@ -32,6 +32,7 @@ import threading
 from pathlib import Path
 
 from ._files import STAGING_FOLDERS, make_folders, on_outcome
+from ._files import process_alive as _alive
 from .errors import InputError
 
 __all__ = ["FolderSet", "sibling", "WRITE_ERRNOS", "raise_write_error"]
@@ -72,16 +73,6 @@ def sibling(target, kind: str, pid: int | None = None) -> Path:
     previous set during a swap), ``lock``."""
     target = Path(target)
     return target.parent / f"{_key(target.name)}{_TAG}{kind}{'' if pid is None else f'-{pid}'}"
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:                 # another user's process
-        return True
-    return True
 
 
 _renameat2 = None

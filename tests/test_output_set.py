@@ -181,6 +181,22 @@ def test_what_killed_runs_left_is_cleared_by_the_next_run(tmp_path):
     assert sorted(tree(out)) == ["report.html"] and beside(out) == ["out"]
 
 
+def test_a_file_written_over_clears_only_the_temporaries_of_killed_runs(tmp_path):
+    """A SIGKILLed single-file write (export, an atomic write, a backup) leaves ``.NAME.PID-XXXX.part``: the
+    next write of NAME removes those whose process is gone, and keeps a live run's and other files'."""
+    from identification._files import atomic_write_bytes
+
+    dead, live = dead_pid(), os.getppid()
+    left = {f".tire.fmu.{dead}-abcd1234.part": b"half", f".tire.fmu.{dead}-efgh5678.tmp": b"half",
+            f".tire.fmu.{dead}-ijkl9012.previous": b"old"}
+    kept = {f".tire.fmu.{live}-mnop3456.part": b"being written", f".other.fmu.{dead}-qrst7890.part": b"x",
+            "tire.fmu.notes": b"user's"}
+    plant(tmp_path, {**left, **kept, "tire.fmu": b"earlier"})
+    atomic_write_bytes({tmp_path / "tire.fmu": b"new"})
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([*kept, "tire.fmu"])
+    assert (tmp_path / "tire.fmu").read_bytes() == b"new"
+
+
 def test_the_runs_temporary_files_live_in_its_new_set(tmp_path, monkeypatch):
     """Temporary files of the run and its workers (a worker killed with its parent cannot remove them) go
     with the new set: swapped-in sets hold none, and nothing is left in $TMPDIR."""

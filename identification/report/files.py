@@ -20,7 +20,7 @@ import math
 import tempfile
 from pathlib import Path
 
-from .._files import atomic_write_texts, json_text, publish_files
+from .._files import TEMP_SUFFIXES, atomic_write_texts, json_text, publish_files
 
 __all__ = ["POINT_CONTACT", "NOT_RECOMMENDED", "FOLDERS", "recommended_fmu", "point_contact_fmu",
            "recommended_params", "not_recommended_fmu", "not_recommended_params", "write_recommended_files",
@@ -132,7 +132,8 @@ def file_counts(out_dir) -> dict:
 
 def remove_staging(out_dir) -> list[Path]:
     """Remove the staging files a killed run left in a report folder (``.NAME.*.tmp`` of the atomic writes,
-    ``.NAME.*.fmu.part`` of the FMU builds, the figures' staging folder); return them."""
+    ``.NAME.*.part`` of the FMU builds, ``.NAME.*.previous`` backups, the figures' staging folder); return
+    them."""
     removed = []
     staging = Path(out_dir) / FIGURES_STAGING
     if staging.is_dir():
@@ -144,7 +145,7 @@ def remove_staging(out_dir) -> list[Path]:
         if not folder.is_dir():
             continue
         for path in folder.iterdir():
-            if path.name.startswith(".") and path.name.endswith((".tmp", ".fmu.part")) and path.is_file():
+            if path.name.startswith(".") and path.name.endswith(TEMP_SUFFIXES) and path.is_file():
                 path.unlink(missing_ok=True)
                 removed.append(path)
     return removed
@@ -182,7 +183,7 @@ def replace_refusal(folder) -> str | None:
         pass
     for entry in sorted(folder.iterdir()):
         name = entry.name
-        if name in REPORT_ENTRIES or (name.startswith(".") and name.endswith((".tmp", ".part", ".previous"))):
+        if name in REPORT_ENTRIES or (name.startswith(".") and name.endswith(TEMP_SUFFIXES)):
             continue
         return (f"is not a report folder ({name} is not a file a report writes, and a report replaces the "
                 f"whole folder): give a new or empty folder")
