@@ -133,7 +133,7 @@ class TractorDiagnosis:
             k, k_ci = reported(fin.params[f"k_{t}"], fin.ci[f"k_{t}"], check, "k")
             c, c_ci = reported(fin.params[f"c_{t}"], fin.ci[f"c_{t}"], check, "c")
             tires[t] = {"k": k, "c": c, "k_ci": k_ci, "c_ci": c_ci,
-                        "k_source": "channel_fit" if check.get("collapsed") else
+                        "k_source": "channel_fit" if check.get("collapsed") or "channel_k" in check else
                         "free_decay" if check.get("prefer") else "joint_fit",
                         "effects": list(self.effects), "parameters": self.tire_parameters(t),
                         "nrmse_before": float(before[t]), "nrmse_after": float(after[t]),
