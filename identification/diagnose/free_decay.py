@@ -40,7 +40,7 @@ import math
 from ..errors import InputError
 from ..recording.preprocess import preprocess
 from ..recording import STANDARD_GRAVITY
-from ..identify.waveform import identify_waveform
+from ..identify.waveform import ONE_MODE_R2, identify_waveform
 
 __all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS", "UNDETERMINED_SHARE"]
 
@@ -52,7 +52,7 @@ UNDETERMINED_SHARE = 0.2
 BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
 #: The waveform fit must explain its window to this R² to count as the free decay of a linear corner (below
 #: it: the tire still on the cleat, a progressive tire or a coupled body the diagnosis did not name).
-MIN_DECAY_R2 = 0.985
+MIN_DECAY_R2 = ONE_MODE_R2
 #: Named, these make the decay's shape other than a damped sinusoid (a steady line rides on it).
 SHAPE_EFFECTS = ("friction_damping", "nonlinear_stiffness", "periodic_disturbance")
 

@@ -37,7 +37,8 @@ from .record import FRONT_TIRES, REAR_TIRES, STANDARD_GRAVITY, Recording
 
 __all__ = [
     "DEFAULT_CUTOFF_HZ", "FILTER_ORDER", "TireSignal", "default_cutoff_hz",
-    "lowpass", "lowpass_design", "filter_guard_s", "noise_rms", "broadband_noise", "check_clipping", "preprocess",
+    "lowpass", "lowpass_design", "MAX_TIRE_RADIUS_M", "cleat_clear_time_s", "filter_guard_s", "noise_rms",
+    "broadband_noise", "check_clipping", "preprocess",
 ]
 
 DEFAULT_CUTOFF_HZ = 100.0
@@ -93,6 +94,9 @@ class TireSignal:
     peak_times_s, peak_values_m_s2 : ndarray
         Peak times and values, refined by a least-squares parabola over
         ±15 % of the dominant period around each peak sample.
+    cleat_clear_s : float
+        The latest time a tire of unloaded radius up to :data:`MAX_TIRE_RADIUS_M` can still touch the cleat
+        (:func:`cleat_clear_time_s`): a peak before it may still be forced.
     """
 
     tire: str
@@ -109,6 +113,27 @@ class TireSignal:
     peak_index: np.ndarray
     peak_times_s: np.ndarray
     peak_values_m_s2: np.ndarray
+    cleat_clear_s: float = math.nan
+
+
+#: The largest unloaded radius of a tractor tire, m: it bounds how long a footprint can still touch the cleat.
+MAX_TIRE_RADIUS_M = 0.9
+
+
+def cleat_clear_time_s(rec: Recording, impact_s: float, dominant_hz: float,
+                       radius_m: float = MAX_TIRE_RADIUS_M) -> float:
+    """The latest time a tire that first touched the cleat at `impact_s` can still touch it.
+
+    A tire of unloaded radius R deflected δ0 on flat ground reaches a cleat of height h from
+    d = √(R² − (R − h − δ0)²) ahead of its edge, and leaves it d past the far edge: from the first touch
+    it rolls w + 2d (w the cleat's width).  δ0 = g / ω² is the static deflection of a corner ringing at
+    `dominant_hz` (k = m ω², δ0 = m g / k); R is `radius_m` (default: the largest tractor tire's).
+    """
+    omega = 2 * math.pi * dominant_hz
+    deflection = STANDARD_GRAVITY / (omega * omega) if omega > 0 else 0.0
+    r, reach = radius_m, min(radius_m, rec.cleat_height_m + deflection)
+    d = math.sqrt(max(0.0, r * r - (r - reach) ** 2))
+    return impact_s + (rec.cleat_width_m + 2 * d) / rec.speed_m_s
 
 
 def lowpass(x, *, sample_rate_hz: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ,
@@ -454,4 +479,5 @@ def _free_peaks(rec, name, x, t_imp, free_start, window_end, sigma, cutoff_hz, m
     return TireSignal(
         tire=name, time_s=t, raw_m_s2=rec.accel_m_s2[name], filtered_m_s2=x, sample_rate_hz=fs,
         cutoff_hz=cutoff_hz, impact_s=t_imp, free_start_s=free_start, window_end_s=float(window_end),
-        noise_m_s2=float(sigma), dominant_hz=f_dom, peak_index=keep, peak_times_s=times, peak_values_m_s2=values)
+        noise_m_s2=float(sigma), dominant_hz=f_dom, peak_index=keep, peak_times_s=times, peak_values_m_s2=values,
+        cleat_clear_s=cleat_clear_time_s(rec, t_imp, f_dom))
