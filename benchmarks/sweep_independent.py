@@ -14,7 +14,7 @@ in the same engine) judges:
 * runs without a result (a non-zero exit);
 * tires declared at the noise floor (``unexplained`` null) while k is off by > 3 % or c by > 10 %;
 * the diagnosis' k against the waveform fit's: further apart than their joint interval
-  (√(h_d² + h_w²), the two half-widths) without a stated reason.
+  (√(h_d² + h_w²), h each interval's side that faces the other estimate) without a stated reason.
 
 Seeds: tune on ``--seeds 100-139``; accept on the README's acceptance seeds (``--seeds 1-40``).
 
@@ -121,8 +121,9 @@ def analyse(job) -> dict:
         if "fallback" in wt:
             wt = wt["fallback"] or {}
         if wt.get("k") and wt.get("k_ci") and d.get("k_ci"):
-            hw = (wt["k_ci"][1] - wt["k_ci"][0]) / 2
-            hd = (d["k_ci"][1] - d["k_ci"][0]) / 2
+            # each interval's side that faces the other estimate
+            hw = wt["k_ci"][1] - wt["k"] if d["k"] > wt["k"] else wt["k"] - wt["k_ci"][0]
+            hd = d["k_ci"][1] - d["k"] if wt["k"] > d["k"] else d["k"] - d["k_ci"][0]
             e["wave_k_err"] = wt["k"] / tt["k"] - 1
             e["vs_wave_sigmas"] = abs(d["k"] - wt["k"]) / max(np.hypot(hw, hd), 1e-12)
             stated = d.get("free_decay_check") or {}

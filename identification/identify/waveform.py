@@ -29,8 +29,9 @@ at which a real tire is a little stiffer or softer than the small-amplitude tire
 for), the estimates move when the window starts later.  The fit is repeated from
 :data:`WINDOW_SHIFT_PERIODS` of a period later, and each half-width grows by that move in quadrature
 (``window_shift``): measured on recordings of an independent simulator (tuning seeds 100-139), the
-intervals of the free decays clean enough for the diagnosis' check (R² >= 0.985) held the true k for 59 %
-of the tires without the move and 75 % with it, the true c for 63 % and 87 %.
+intervals of the 90 free decays clean enough for the diagnosis' check (R² >= 0.985) held the true k for
+46 % of the tires without the move and 56 % with it, the true c for 57 % and 74 % (what is left: a real
+tire's equivalent linear k depends a little on the amplitude).
 """
 
 from __future__ import annotations
