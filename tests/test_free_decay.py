@@ -137,3 +137,28 @@ def test_an_undetermined_corner_reports_its_own_channel_fit_within_the_range_sea
     assert all(doc[t]["k_source"] != "channel_fit" for t in ("FL", "FR", "RR"))
     warning = [w for w in diagnosis_warnings(diag, _NoGain()) if "of this channel's signal unexplained" in w]
     assert len(warning) == 1 and "the channel's own fit's" in warning[0]
+
+
+def test_a_channel_left_above_its_noise_floor_takes_the_free_decays_c_and_keeps_the_joint_k(corners):
+    """The joint values inside the free decay's interval: at the noise floor they stand; with a residual
+    above it (here 3x the noise in FL, 5 % of its signal) FL's c is the free decay's, its interval
+    stretched to hold the joint c, and k stays the joint fit's."""
+    run, pb, start, fit = corners
+    left = {"share": 0.05, "window": [1.0, 1.2], "residual_to_noise": 3.0}
+    diag = dataclasses.replace(_diagnosis(pb, start, fit, fit), unexplained={**{t: None for t in pb.channels},
+                                                                            "FL": left})
+    diag.extra["free_decay"] = check = free_decay_check(diag)
+    assert check["FL"]["valid"] and not check["FL"]["prefer"] and check["FL"]["prefer_c"]
+    assert not any(check[t]["prefer_c"] for t in ("FR", "RL", "RR"))
+    assert check["RL"]["prefer"] and doc_c_source(diag, "RL") == "free_decay"   # outside: both the decay's
+    doc = diag.to_json()["tires"]
+    rl = doc["FL"]
+    assert rl["c_source"] == "free_decay" and rl["c"] == check["FL"]["c"]
+    assert rl["c_ci"][0] <= min(check["FL"]["c"], fit.params["c_FL"]) <= max(check["FL"]["c"], fit.params["c_FL"]) \
+        <= rl["c_ci"][1]
+    assert rl["k_source"] == "joint_fit" and rl["k"] == fit.params["k_FL"]
+    assert all(doc[t]["c_source"] == "joint_fit" and doc[t]["c"] == fit.params[f"c_{t}"] for t in ("FR", "RR"))
+
+
+def doc_c_source(diag, tire):
+    return diag.to_json()["tires"][tire]["c_source"]

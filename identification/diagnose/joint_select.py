@@ -135,6 +135,8 @@ class TractorDiagnosis:
             tires[t] = {"k": k, "c": c, "k_ci": k_ci, "c_ci": c_ci,
                         "k_source": "channel_fit" if check.get("collapsed") or "channel_k" in check else
                         "free_decay" if check.get("prefer") else "joint_fit",
+                        "c_source": "channel_fit" if check.get("collapsed") or "channel_c" in check else
+                        "free_decay" if check.get("prefer") or check.get("prefer_c") else "joint_fit",
                         "effects": list(self.effects), "parameters": self.tire_parameters(t),
                         "nrmse_before": float(before[t]), "nrmse_after": float(after[t]),
                         "noise_nrmse": self.noise_nrmse(t), "unexplained": self.unexplained[t],
