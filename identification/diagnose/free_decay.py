@@ -16,7 +16,7 @@ intervals do not even overlap so far).  Where both lie inside but the joint mode
 above its noise floor, c alone is the free decay's (``"c_source": "free_decay"``): the decay rate is
 what a mis-modelled impact pulls (its energy input trades against the damping), the frequency is held
 by the whole record.  On the independent simulator's tuning seeds (100-139), of the 12 tires whose joint
-values lay inside a valid decay's interval, the decay's c was closer to the truth for 10 (median |c
+values lay inside a valid decay's interval, the decay's c was the more accurate for 10 (median |c
 error| 8.6 % against 15 %) and its k for 5 (0.61 % against 0.47 %).  The tire's values are never further
 from the free decay than its interval allows.
 
