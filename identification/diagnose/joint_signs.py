@@ -10,6 +10,11 @@ its own impact.  Two cases are left open there:
 * ``sign_undetermined``: no quiet stretch precedes a channel's impact (a steady vibration that never
   stops), so its first excursion has no sign.
 
+* a channel the conditioning flipped whose diagnosis leaves it largely unexplained: at a staggered
+  cleat the body carries the first side's impact to the other hub (opposite in sign) before that hub's
+  own, slower impact (a footprint) rises; its "first excursion" is then the carried one (seen on the
+  project's own rig: a rigid tractor, 0.27 m stagger, 0.33 m footprint, FL flipped and k 240 % off).
+
 Only a model of the whole tractor tells these apart: the body, the pivot and the four tires must
 explain all channels at once.  :func:`settle_signs` diagnoses the recording as recorded and with each
 open channel's sign reversed (one at a time; an undetermined channel only when the first diagnosis
@@ -22,7 +27,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-__all__ = ["open_signs", "with_sign_reversed", "settle_signs", "MAX_OPEN", "SUSPECT_SHARE", "PAIR_SHARE",
+__all__ = ["open_signs", "with_sign_reversed", "with_flip_undone", "settle_signs", "UNDONE", "MAX_OPEN", "SUSPECT_SHARE", "PAIR_SHARE",
            "AS_RECORDED"]
 
 #: At most this many open channels are tested (one diagnosis each, plus the recording as it is).
@@ -34,8 +39,10 @@ SUSPECT_SHARE = 0.3
 #: channel's signal unexplained (measured: a pivot explained as recorded leaves 1e-5; a sensor upside
 #: down 0.15-1.0 on one of the pair, whatever body the selection tried).
 PAIR_SHARE = 0.05
-#: The label of the hypothesis that every sign is as recorded.
+#: The label of the hypothesis that every sign is as recorded (as conditioned).
 AS_RECORDED = "as recorded"
+#: A hypothesis ``"<channel> flip undone"``: the conditioning's sign correction of that channel undone.
+UNDONE = "flip undone"
 
 
 def open_signs(rec) -> tuple[list[str], list[str]]:
@@ -53,6 +60,21 @@ def with_sign_reversed(rec, channel: str, reason: str):
     doc.pop("flip_ambiguous", None)
     doc.pop("sign_undetermined", None)
     doc["warnings"] = [*doc.get("warnings", []), f"channel {channel}: {reason}; sign corrected"]
+    accel = {c: (-x if c == channel else x) for c, x in rec.accel_m_s2.items()}
+    return replace(rec, accel_m_s2=accel, conditioning=doc)
+
+
+def with_flip_undone(rec, channel: str):
+    """`rec` with the conditioning's sign correction of `channel` undone (the channel as recorded)."""
+    doc = dict(rec.conditioning or {})
+    doc["flipped"] = [c for c in doc.get("flipped", []) if c != channel]
+    doc.pop("flip_ambiguous", None)
+    doc.pop("sign_undetermined", None)
+    doc["warnings"] = [w for w in doc.get("warnings", []) if not (w.startswith(f"channel {channel}: ")
+                                                                   and w.endswith("sign corrected"))]
+    doc["warnings"].append(f"channel {channel}: the joint fit explains the channels best with this sensor as "
+                           f"recorded (its impact's first excursion was carried across by the body): the "
+                           f"conditioning's sign correction undone")
     accel = {c: (-x if c == channel else x) for c, x in rec.accel_m_s2.items()}
     return replace(rec, accel_m_s2=accel, conditioning=doc)
 
@@ -76,9 +98,11 @@ def settle_signs(rec, diagnose_once, tick=None):
 
     The recording is diagnosed as recorded first.  The hypotheses tested beside it, one diagnosis each,
     reverse one channel: each of an ambiguous front pair when the diagnosis as recorded leaves more than
-    :data:`PAIR_SHARE` of either's signal unexplained (a pivoting axle it explains is left alone), and
-    each channel of undetermined sign that it leaves with more than :data:`SUSPECT_SHARE` unexplained
-    (a rear channel whose impact rises out of the body's motion is undetermined but usually explained).
+    :data:`PAIR_SHARE` of either's signal unexplained (a pivoting axle it explains is left alone), each
+    channel of undetermined sign that it leaves with more than :data:`SUSPECT_SHARE` unexplained
+    (a rear channel whose impact rises out of the body's motion is undetermined but usually explained),
+    and each channel the conditioning flipped that it leaves with more than :data:`SUSPECT_SHARE`
+    unexplained (that flip undone: ``"<channel> flip undone"``).
 
     Parameters
     ----------
@@ -102,11 +126,14 @@ def settle_signs(rec, diagnose_once, tick=None):
     if not any(_suspect(first, c, PAIR_SHARE) for c in ambiguous):
         ambiguous = []          # the signs as recorded explain the pair (a pivoting axle): nothing to test
     channels = ambiguous + [c for c in undetermined if c not in ambiguous and _suspect(first, c, SUSPECT_SHARE)]
-    if not channels:
+    flipped = [c for c in rec.tires if c in (rec.conditioning or {}).get("flipped", [])]
+    undo = [c for c in flipped if c not in channels and _suspect(first, c, SUSPECT_SHARE)]
+    if not channels and not undo:
         return first
-    if len(channels) > MAX_OPEN:
-        first.extra["sign_test"] = {"open": channels, "skipped": f"{len(channels)} channels open, more than "
-                                                                 f"{MAX_OPEN}: left as recorded"}
+    if len(channels) + len(undo) > MAX_OPEN:
+        first.extra["sign_test"] = {"open": channels + undo, "skipped": f"{len(channels) + len(undo)} channels "
+                                                                        f"open, more than {MAX_OPEN}: left as "
+                                                                        f"conditioned"}
         return first
     runs = {AS_RECORDED: first}
     for c in channels:
@@ -114,9 +141,12 @@ def settle_signs(rec, diagnose_once, tick=None):
         reason = ("the joint fit explains the channels best with this sensor read upside down (its impact's "
                   "first excursion could not tell)")
         runs[c] = diagnose_once(with_sign_reversed(rec, c, reason))
+    for c in undo:
+        tick(f"signs: {c} as recorded")
+        runs[f"{c} {UNDONE}"] = diagnose_once(with_flip_undone(rec, c))
     bic = {label: float(_bic(d)) for label, d in runs.items()}
     order = sorted(bic, key=bic.get)
     chosen = runs[order[0]]
-    chosen.extra["sign_test"] = {"open": channels, "bic": bic, "chosen": order[0],
+    chosen.extra["sign_test"] = {"open": channels + undo, "bic": bic, "chosen": order[0],
                                  "margin": float(bic[order[1]] - bic[order[0]])}
     return chosen

@@ -48,7 +48,7 @@ def diagnosis_warnings(diag, gain) -> list[str]:
     approximate, the sensor signs it settled, a refit at the fitted delay's speed, a baseline whose FMUs
     could not start.  The conditioning's warnings come
     before it (:func:`identification.recording.window.focus`)."""
-    from .joint_signs import AS_RECORDED
+    from .joint_signs import AS_RECORDED, UNDONE
 
     out = []
     profile = diag.problem.rec.cleat_profile
@@ -58,8 +58,14 @@ def diagnosis_warnings(diag, gain) -> list[str]:
                    f"profile itself")
     signs = diag.extra.get("sign_test")
     if signs and "chosen" in signs:
-        what = "every sensor as recorded (a pivoting axle or a carried impact)" if signs["chosen"] == AS_RECORDED \
-            else f"{signs['chosen']} reads upside down (sign corrected)"
+        chosen = signs["chosen"]
+        kept = (diag.problem.rec.conditioning or {}).get("flipped")
+        what = (f"the signs as the conditioning left them ({'/'.join(kept)} corrected)" if chosen == AS_RECORDED
+                and kept else
+                "every sensor as recorded (a pivoting axle or a carried impact)" if chosen == AS_RECORDED else
+                f"{chosen.split()[0]} as recorded (the conditioning's sign correction undone: its first "
+                f"excursion was carried across by the body)" if chosen.endswith(UNDONE) else
+                f"{chosen} reads upside down (sign corrected)")
         out.append(f"the signs of {'/'.join(signs['open'])} tested in the joint fit: {what}, by a BIC margin of "
                    f"{signs['margin']:.1f} over the next hypothesis")
     elif signs:
