@@ -68,6 +68,7 @@ def test_a_decay_whose_first_peak_is_still_forced_is_fitted_from_the_next_one(mo
     k, c = true_k("FL", MODE), 2 * LOADS_N["FL"] / STANDARD_GRAVITY * MODE[1] * MODE[0]
     r = identify_waveform_recording(_forced_start(5.0), ["FL"])["FL"]
     assert r.skipped_peaks == 1 and r.r2 >= waveform.ONE_MODE_R2
+    assert "starts at the free vibration's peak 2" in r.warning() and r.to_json()["skipped_peaks"] == 1
     assert abs(r.k / k - 1) < 0.005 and abs(r.c / c - 1) < 0.02
     assert r.k_ci[0] <= k <= r.k_ci[1] and r.c_ci[0] <= c <= r.c_ci[1]
     monkeypatch.setattr(waveform, "MAX_SKIPPED_PEAKS", 0)

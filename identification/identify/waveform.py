@@ -89,6 +89,15 @@ class WaveformResult(PaperResult):
     window_shift: tuple[float, float] = (math.nan, math.nan)
     skipped_peaks: int = 0
 
+    def warning(self) -> str | None:
+        """The one-mode fit's warning (:meth:`PaperResult.warning`), and where the fit skipped peaks, why."""
+        base = super().warning()
+        if not self.skipped_peaks:
+            return base
+        note = (f"the waveform fit starts at the free vibration's peak {self.skipped_peaks + 1}: from the first, "
+                f"where the tire can still touch the cleat at this speed, one damped mode does not explain it")
+        return f"channel {self.tire}: {note}" if base is None else f"{base}; {note}"
+
     def to_json(self) -> dict:
         doc = super().to_json()
         doc["k_ci"] = [float(v) for v in self.k_ci]
