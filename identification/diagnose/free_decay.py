@@ -154,9 +154,15 @@ def _undetermined(diag, tire: str, entry: dict) -> None:
     if not any(e in BODY_EFFECTS for e in diag.effects):
         # an independent corner: its own fit (the free decay's, the part of the record that needs the least
         # of the model) is the better value in that range; under a body it would be the body's mode
-        from .joint_start import tire_start
+        start = diag.extra.get("start") or {}
+        if f"k_{tire}" in start and f"c_{tire}" in start:
+            # the selection's starting values: the channel's own fit with the joint timing search's corrections
+            # (a pivoting axle's roll mode misread as a front tire's own, seen 13x the tire's k; an axle's scale)
+            k, c = start[f"k_{tire}"], start[f"c_{tire}"]
+        else:
+            from .joint_start import tire_start
 
-        k, c = tire_start(diag.problem, tire)
+            k, c = tire_start(diag.problem, tire)
         entry["channel_k"], entry["channel_c"] = float(k), float(c)
         sentence += (f"; k and c are the channel's own fit's (k {k / 1e3:.1f} kN/m, c {c / 1e3:.3f} kN s/m), "
                      f"which needs the least of the model")
