@@ -33,9 +33,10 @@ A joint fit that leaves more than :data:`UNDETERMINED_SHARE` of a channel's sign
 alike, shares of 20-90 % with k off by 40-1400 % against intervals of ±10-40 %).  Each interval is then the
 whole range searched (``"undetermined": true`` in the check, and a warning with the share): the interval
 the data support.  Unless the free decay gives the tire's values, they are the channel's own fit's where no
-body is named (``"k_source": "channel_fit"``; the free decay needs the least of the model, and on that
-simulator's slow passes it was 0.5-17 % off where the joint fit was 20-85 % off), else the joint fit's (a
-channel's own fit would be the body's mode).
+body is named (``"k_source": "channel_fit"``: it needs the least of the model; on that simulator's slow
+passes 0.5-16 % off where the joint fit was 8-70 % off), or the selection's start where that fit lies
+outside the range searched around it (another mode), else the joint fit's (a channel's own fit would be the
+body's mode).
 Every check entry carries that range (``k_range``, ``c_range``).
 """
 
@@ -154,15 +155,16 @@ def _undetermined(diag, tire: str, entry: dict) -> None:
     if not any(e in BODY_EFFECTS for e in diag.effects):
         # an independent corner: its own fit (the free decay's, the part of the record that needs the least
         # of the model) is the better value in that range; under a body it would be the body's mode
-        start = diag.extra.get("start") or {}
-        if f"k_{tire}" in start and f"c_{tire}" in start:
-            # the selection's starting values: the channel's own fit with the joint timing search's corrections
-            # (a pivoting axle's roll mode misread as a front tire's own, seen 13x the tire's k; an axle's scale)
-            k, c = start[f"k_{tire}"], start[f"c_{tire}"]
-        else:
-            from .joint_start import tire_start
+        from .joint_start import tire_start
 
-            k, c = tire_start(diag.problem, tire)
+        k, c = tire_start(diag.problem, tire)
+        start = diag.extra.get("start") or {}
+        inside = entry["k_range"][0] <= k <= entry["k_range"][1] and entry["c_range"][0] <= c <= entry["c_range"][1]
+        if not inside and f"k_{tire}" in start and f"c_{tire}" in start:
+            # outside the range searched around the selection's start: the channel rings in another mode (a
+            # missed pivot's roll read as a front tire's own, seen at 13x its k); the start, which the joint
+            # timing search corrected, instead
+            k, c = start[f"k_{tire}"], start[f"c_{tire}"]
         entry["channel_k"], entry["channel_c"] = float(k), float(c)
         sentence += (f"; k and c are the channel's own fit's (k {k / 1e3:.1f} kN/m, c {c / 1e3:.3f} kN s/m), "
                      f"which needs the least of the model")
