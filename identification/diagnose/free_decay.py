@@ -160,14 +160,15 @@ def _undetermined(diag, tire: str, entry: dict) -> None:
         k, c = tire_start(diag.problem, tire)
         start = diag.extra.get("start") or {}
         inside = entry["k_range"][0] <= k <= entry["k_range"][1] and entry["c_range"][0] <= c <= entry["c_range"][1]
+        whose = "the channel's own fit's, which needs the least of the model"
         if not inside and f"k_{tire}" in start and f"c_{tire}" in start:
             # outside the range searched around the selection's start: the channel rings in another mode (a
             # missed pivot's roll read as a front tire's own, seen at 13x its k); the start, which the joint
             # timing search corrected, instead
             k, c = start[f"k_{tire}"], start[f"c_{tire}"]
+            whose = "the selection's start (the channel's own fit rings in another mode, outside that range)"
         entry["channel_k"], entry["channel_c"] = float(k), float(c)
-        sentence += (f"; k and c are the channel's own fit's (k {k / 1e3:.1f} kN/m, c {c / 1e3:.3f} kN s/m), "
-                     f"which needs the least of the model")
+        sentence += f"; k and c are {whose} (k {k / 1e3:.1f} kN/m, c {c / 1e3:.3f} kN s/m)"
     entry["reason"] = f"{entry['reason']}; {sentence}" if entry.get("reason") else sentence
 
 
@@ -227,8 +228,8 @@ def _channel_fit_instead(diag, tire: str) -> dict:
 def reported(value: float, ci, check: dict, q: str) -> tuple[float, list]:
     """The tire's value and interval of quantity `q` ('k' or 'c'): the joint fit's, or, where the joint fit's k
     or c lies outside the free decay's interval (and, for c, where the joint model leaves the channel above its
-    noise floor), the free decay's with its interval stretched to hold the joint fit's estimate too; where the joint fit collapsed (:func:`collapsed`), the channel's own fit's with
-    the range searched; where the model leaves too much of the channel unexplained (``undetermined``), the
+    noise floor), the free decay's with its interval stretched to hold the joint fit's estimate too; where the
+    joint fit collapsed (:func:`collapsed`), the channel's own fit's with the range searched; where the model leaves too much of the channel unexplained (``undetermined``), the
     channel's own fit's (no body named: :func:`_undetermined`) or the joint fit's, with the range searched."""
     if check.get("collapsed"):
         return float(check[q]), [float(v) for v in check[f"{q}_ci"]]
