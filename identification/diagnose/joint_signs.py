@@ -52,31 +52,34 @@ def open_signs(rec) -> tuple[list[str], list[str]]:
             [c for c in rec.tires if c in doc.get("sign_undetermined", [])])
 
 
+def _negated(rec, channel: str, flipped: list, warnings: list):
+    """`rec` with `channel`'s acceleration negated and its conditioning's ``flipped`` and ``warnings`` replaced,
+    no longer listing the channels it left open."""
+    doc = dict(rec.conditioning or {})
+    doc["flipped"], doc["warnings"] = flipped, warnings
+    doc.pop("flip_ambiguous", None)
+    doc.pop("sign_undetermined", None)
+    accel = {c: (-x if c == channel else x) for c, x in rec.accel_m_s2.items()}
+    return replace(rec, accel_m_s2=accel, conditioning=doc)
+
+
 def with_sign_reversed(rec, channel: str, reason: str):
     """`rec` with `channel`'s acceleration negated, its conditioning saying so (``flipped``) and no longer
     listing the channels it left open."""
-    doc = dict(rec.conditioning or {})
-    doc["flipped"] = [*doc.get("flipped", []), channel]
-    doc.pop("flip_ambiguous", None)
-    doc.pop("sign_undetermined", None)
-    doc["warnings"] = [*doc.get("warnings", []), f"channel {channel}: {reason}; sign corrected"]
-    accel = {c: (-x if c == channel else x) for c, x in rec.accel_m_s2.items()}
-    return replace(rec, accel_m_s2=accel, conditioning=doc)
+    doc = rec.conditioning or {}
+    return _negated(rec, channel, [*doc.get("flipped", []), channel],
+                    [*doc.get("warnings", []), f"channel {channel}: {reason}; sign corrected"])
 
 
 def with_flip_undone(rec, channel: str):
     """`rec` with the conditioning's sign correction of `channel` undone (the channel as recorded)."""
-    doc = dict(rec.conditioning or {})
-    doc["flipped"] = [c for c in doc.get("flipped", []) if c != channel]
-    doc.pop("flip_ambiguous", None)
-    doc.pop("sign_undetermined", None)
-    doc["warnings"] = [w for w in doc.get("warnings", []) if not (w.startswith(f"channel {channel}: ")
-                                                                   and w.endswith("sign corrected"))]
-    doc["warnings"].append(f"channel {channel}: the joint fit explains the channels best with this sensor as "
-                           f"recorded (its impact's first excursion was carried across by the body): the "
-                           f"conditioning's sign correction undone")
-    accel = {c: (-x if c == channel else x) for c, x in rec.accel_m_s2.items()}
-    return replace(rec, accel_m_s2=accel, conditioning=doc)
+    doc = rec.conditioning or {}
+    kept = [w for w in doc.get("warnings", []) if not (w.startswith(f"channel {channel}: ")
+                                                       and w.endswith("sign corrected"))]
+    return _negated(rec, channel, [c for c in doc.get("flipped", []) if c != channel],
+                    kept + [f"channel {channel}: the joint fit explains the channels best with this sensor as "
+                            f"recorded (its impact's first excursion was carried across by the body): the "
+                            f"conditioning's sign correction undone"])
 
 
 def _bic(diag) -> float:

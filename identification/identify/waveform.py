@@ -237,38 +237,44 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
         decay_misfit=inflation, window_shift=shift, skipped_peaks=skipped)
 
 
+def _refit_from(t, accel, start_s: float, end_s: float, params):
+    """(selection, :func:`fit_free_decay`'s result) of the window [`start_s`, `end_s`] seeded with `params`, or
+    None where it is too short or the fit fails or finds no decaying oscillation."""
+    sel = (t >= start_s) & (t <= end_s)
+    if sel.sum() < 20:
+        return None
+    try:
+        fit = fit_free_decay(t[sel], accel[sel], sigma0=float(params[0]), omega_d0=abs(float(params[1])))
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    sigma, wd = float(fit[0][0]), abs(float(fit[0][1]))
+    if not (sigma > 0 and wd > 0 and math.isfinite(sigma) and math.isfinite(wd)):
+        return None
+    return sel, fit
+
+
 def _after_the_cleat(sig: TireSignal, params):
     """The first window from a later peak that one damped mode explains (R² >= :data:`ONE_MODE_R2`), skipping
     only peaks before ``sig.cleat_clear_s``: (selection, fit, peaks skipped), or None."""
-    t, peaks = sig.time_s, sig.peak_times_s
+    peaks = sig.peak_times_s
     for j in range(1, min(MAX_SKIPPED_PEAKS, peaks.size - 1) + 1):
         if not peaks[j - 1] < sig.cleat_clear_s:      # NaN (not known): nothing skipped
             return None
-        sel = (t >= peaks[j]) & (t <= sig.window_end_s)
-        if sel.sum() < 20:
+        later = _refit_from(sig.time_s, sig.raw_m_s2, peaks[j], sig.window_end_s, params)
+        if later is None:
             return None
-        try:
-            fit = fit_free_decay(t[sel], sig.raw_m_s2[sel], sigma0=float(params[0]), omega_d0=abs(float(params[1])))
-        except (np.linalg.LinAlgError, ValueError):
-            return None
-        if fit[0][0] > 0 and fit[2] >= ONE_MODE_R2:
-            return sel, fit, j
+        if later[1][2] >= ONE_MODE_R2:
+            return later[0], later[1], j
     return None
 
 
 def _window_shift(t, accel, start_s: float, end_s: float, params, mass_kg: float, k: float, c: float):
     """(Δk, Δc): the move of k and c when the fit starts at `start_s` (seeded with `params`); NaN where that
     window is too short or the fit finds no decaying oscillation there."""
-    sel = (t >= start_s) & (t <= end_s)
-    if sel.sum() < 20:
+    later = _refit_from(t, accel, start_s, end_s, params)
+    if later is None:
         return math.nan, math.nan
-    try:
-        later, *_ = fit_free_decay(t[sel], accel[sel], sigma0=float(params[0]), omega_d0=abs(float(params[1])))
-    except (np.linalg.LinAlgError, ValueError):
-        return math.nan, math.nan
-    sigma, wd = float(later[0]), abs(float(later[1]))
-    if not (sigma > 0 and wd > 0 and math.isfinite(sigma) and math.isfinite(wd)):
-        return math.nan, math.nan
+    sigma, wd = float(later[1][0][0]), abs(float(later[1][0][1]))
     return mass_kg * (wd * wd + sigma * sigma) - k, 2 * mass_kg * sigma - c
 
 
