@@ -194,19 +194,8 @@ def _raise_terminated(signum, frame):
 
 
 def _raise_interrupt(signum, frame):
-    """Ctrl-C (and its retries on SIGALRM): raise KeyboardInterrupt where the command is; in fragile
-    standard-library code (:data:`_FRAGILE`: an import lock's callback, where the exception would be printed
-    as "Exception ignored" and the run go on), try again 20 ms later."""
     global _signalled
-    if signum == signal.SIGALRM:
-        if _signalled != 130:
-            return
-    elif _signalled != EXIT_TERMINATED:     # SIGTERM's retries keep SIGALRM
-        _signalled = 130
-        signal.signal(signal.SIGALRM, _raise_interrupt)
-    if _in_the_standard_library(frame):
-        signal.setitimer(signal.ITIMER_REAL, 0.02)
-        return
+    _signalled = 130
     raise KeyboardInterrupt
 
 
