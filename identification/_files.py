@@ -68,7 +68,49 @@ def temp_beside(path, suffix: str) -> tuple[int, str]:
     """
     path = Path(path)
     clear_dead_temporaries(path)
-    return tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}-", suffix=suffix)
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}-", suffix=suffix)
+    _OPEN_TEMPORARIES.add(name)
+    return fd, name
+
+
+#: The temporaries this process made (:func:`temp_beside`; most are renamed or removed since): what
+#: :func:`undo_at_forced_exit` removes of them where they still are.
+_OPEN_TEMPORARIES: set = set()
+#: Output under way that a run ended where it stands must undo: the open :class:`OutputFolders` blocks of
+#: every thread, and the clean-ups registered with :func:`at_forced_exit` (a folder set being written).
+_OPEN_BLOCKS: list = []
+_FORCED_EXIT_CLEANUPS: dict = {}
+
+
+def at_forced_exit(key, cleanup=None) -> None:
+    """Register ``cleanup()`` under `key` to run if the process is ended where it stands (a terminated run
+    that did not unwind in time: :func:`undo_at_forced_exit`); ``cleanup=None`` unregisters `key`."""
+    if cleanup is None:
+        _FORCED_EXIT_CLEANUPS.pop(key, None)
+    else:
+        _FORCED_EXIT_CLEANUPS[key] = cleanup
+
+
+def undo_at_forced_exit() -> None:
+    """Undo the output under way, from any thread, before the process is ended without unwinding: the
+    registered clean-ups (latest first), the open :class:`OutputFolders` blocks (innermost first: older
+    files back, new files and folders removed) and the temporaries beside files.  Each step is tried on its
+    own; nothing raises."""
+    for key in reversed(list(_FORCED_EXIT_CLEANUPS)):
+        cleanup = _FORCED_EXIT_CLEANUPS.pop(key, None)
+        try:
+            if cleanup is not None:
+                cleanup()
+        except BaseException:       # a forced exit follows: what can be undone is undone
+            pass
+    for block in reversed(list(_OPEN_BLOCKS)):
+        try:
+            block.remove()
+        except BaseException:
+            pass
+    for name in list(_OPEN_TEMPORARIES):
+        _unlink_quietly(name)
+    _OPEN_TEMPORARIES.clear()
 
 
 def clear_dead_temporaries(path) -> list[Path]:
@@ -250,11 +292,13 @@ class OutputFolders:
 
     def __enter__(self) -> "OutputFolders":
         _blocks().append(self)
+        _OPEN_BLOCKS.append(self)
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
         blocks = _blocks()
         blocks.remove(self)
+        _OPEN_BLOCKS.remove(self)
         if exc_type is not None:
             self.remove()
         elif blocks:

@@ -31,7 +31,7 @@ import tempfile
 import threading
 from pathlib import Path
 
-from ._files import STAGING_FOLDERS, make_folders, on_outcome
+from ._files import STAGING_FOLDERS, at_forced_exit, make_folders, on_outcome
 from ._files import process_alive as _alive
 from .errors import InputError
 
@@ -190,12 +190,15 @@ class FolderSet:
         self._saved_tmp = None
         self._previous: Path | None = None       # where the previous set is after the swap (None: there was none)
         self._swapped = False
+        self._settled = False                     # kept or undone (:meth:`_settle`)
+        self._settle_lock = threading.Lock()
 
     # ------------------------------------------------------------------ the run
     def __enter__(self) -> Path:
         if self.target.exists() and not self.target.is_dir():
             raise InputError(self.shown, "exists and is not a directory")
         make_folders(self.target.parent)
+        at_forced_exit(self, self._end_now)
         try:
             self._lock()
             self._recover()
@@ -264,6 +267,7 @@ class FolderSet:
         os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
 
     def _unlock(self) -> None:
+        at_forced_exit(self, None)
         fd, self._lock_fd = self._lock_fd, None
         if fd is None:
             return
@@ -329,8 +333,17 @@ class FolderSet:
                 self._previous = old
             self._swapped = True
 
+    def _settle(self) -> bool:
+        """Whether this call is the one that ends a swapped set: its keep or undo runs once, even when a forced
+        exit (another thread) and the command's own end come together."""
+        with self._settle_lock:
+            first, self._settled = not self._settled, True
+        return first
+
     def _keep(self) -> None:
         """The new set stays: delete the previous one, release the lock."""
+        if not self._settle():
+            return
         try:
             with _signals_deferred():           # the command has succeeded: an interrupt now changes nothing
                 if self._previous is not None:
@@ -340,6 +353,8 @@ class FolderSet:
 
     def _undo(self) -> None:
         """Put the previous set back (or no folder, if there was none), delete the new one, release the lock."""
+        if not self._settle():
+            return
         try:
             with _signals_deferred(), contextlib.suppress(OSError):
                 if self._previous is None:
@@ -361,3 +376,13 @@ class FolderSet:
                 _remove(self.staging)
         finally:
             self._unlock()
+
+    def _end_now(self) -> None:
+        """The process is ended where it stands (:func:`identification._files.undo_at_forced_exit`, from
+        another thread): the previous set back, the new one and the lock removed."""
+        if self._swapped:
+            self._undo()
+        else:
+            _remove(self.staging)
+            with contextlib.suppress(OSError):
+                os.unlink(sibling(self.target, "lock"))

@@ -150,11 +150,18 @@ _signalled = 0
 #: Seconds a terminated command has to unwind before it is ended where it stands.
 TERMINATE_GRACE_S = 10.0
 
+#: The timer of :data:`TERMINATE_GRACE_S` (None: no SIGTERM yet); cancelled once the command has ended.
+_grace_timer = None
+
 
 def _force_exit() -> None:
-    """End a terminated run that did not unwind in time (a library holding a lock the unwinding needs; its
-    temporary files may then stay behind)."""
+    """End a terminated run that did not unwind in time (a library that swallowed the exception, or holds a
+    lock the unwinding needs): its output under way is undone first, from this timer's thread
+    (:func:`identification._files.undo_at_forced_exit`)."""
     try:
+        files = sys.modules.get("identification._files")
+        if files is not None:
+            files.undo_at_forced_exit()
         sys.stderr.write("cleatfmu: terminated\n")
         sys.stderr.flush()
     finally:
@@ -175,16 +182,21 @@ def _in_the_standard_library(frame) -> bool:
 def _raise_terminated(signum, frame):
     """SIGTERM (and its retries on SIGALRM): raise :class:`Terminated` where the command is; in fragile
     standard-library code (:data:`_FRAGILE`), try again 20 ms later; after :data:`TERMINATE_GRACE_S` end the
-    run where it stands."""
+    run where it stands.  Once the command has ended (:data:`_ended`) a SIGTERM is only remembered: the
+    run ends with 143 when its signal handlers are restored, and a pending retry is dropped."""
     global _signalled
-    if signum == signal.SIGALRM and _signalled != EXIT_TERMINATED:
+    if signum == signal.SIGALRM and (_signalled != EXIT_TERMINATED or _ended):
+        return
+    if _ended:
+        _signalled = _signalled or EXIT_TERMINATED
         return
     if not _signalled:
         import threading
 
-        timer = threading.Timer(TERMINATE_GRACE_S, _force_exit)
-        timer.daemon = True
-        timer.start()
+        global _grace_timer
+        _grace_timer = threading.Timer(TERMINATE_GRACE_S, _force_exit)
+        _grace_timer.daemon = True
+        _grace_timer.start()
         signal.signal(signal.SIGALRM, _raise_terminated)
     _signalled = EXIT_TERMINATED
     if _in_the_standard_library(frame):
@@ -194,25 +206,56 @@ def _raise_terminated(signum, frame):
 
 
 def _raise_interrupt(signum, frame):
+    """Ctrl-C: raise KeyboardInterrupt where the command is; once it has ended (:data:`_ended`), only
+    remember it (the run then ends with 130)."""
     global _signalled
+    if _ended:
+        _signalled = _signalled or 130
+        return
     _signalled = 130
     raise KeyboardInterrupt
 
 
-def _catch_sigterm():
-    """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only); returns the previous
-    handler, or None where it cannot be set."""
+#: Whether the command has ended (its outcome decided, its clean-up done): a signal from here on raises
+#: nothing, which could only escape as a traceback from the command line's own code.
+_ended = False
+
+
+def _previous_sigterm():
+    """SIGTERM's handler before the command (the default where :mod:`identification` deferred it during the
+    imports), or None where the command cannot set its own (not the main thread: a notebook's worker)."""
+    import threading
+
     import identification
 
-    try:
-        previous = signal.signal(signal.SIGTERM, _raise_terminated)
-        return signal.SIG_DFL if previous is identification._defer_interrupt else previous
-    except ValueError:          # not the main thread (a notebook's worker thread): SIGTERM keeps its default
+    if threading.current_thread() is not threading.main_thread():
         return None
+    previous = signal.getsignal(signal.SIGTERM)
+    if previous is identification._defer_interrupt or previous is None:
+        return signal.SIG_DFL
+    return previous
+
+
+def _restore_signals(previous) -> None:
+    """End the command's handling of signals: mark it ended (:data:`_ended`), cancel a pending retry of
+    SIGTERM and give SIGTERM its `previous` handler back (Ctrl-C keeps raising nothing: the run is about to
+    end with its status)."""
+    global _ended, _grace_timer
+    _ended = True
+    if _grace_timer is not None:
+        _grace_timer.cancel()
+        _grace_timer = None
+    if previous is None:
+        return
+    signal.setitimer(signal.ITIMER_REAL, 0)
+    if signal.getsignal(signal.SIGALRM) is _raise_terminated:
+        signal.signal(signal.SIGALRM, signal.SIG_IGN)       # drops a retry already pending
+        signal.signal(signal.SIGALRM, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, previous)
 
 
 def _answer_early_interrupt() -> None:
-    """Ctrl-C from here on raises KeyboardInterrupt (SIGTERM :class:`Terminated`, :func:`_catch_sigterm`); one
+    """Ctrl-C from here on raises KeyboardInterrupt (SIGTERM :class:`Terminated`, :func:`_previous_sigterm`); one
     that came while the program's modules were imported (:mod:`identification` defers both when it is the
     program) is raised now."""
     import identification
@@ -275,7 +318,12 @@ def main(argv=None) -> int:
     workers were killed (seen: a ``diagnose --workers 2`` stopped by Ctrl-C hung after "interrupted"), and
     re-raise a Ctrl-C that came during the imports as status -2.
     """
-    status = _main(argv)
+    try:
+        status = _main(argv)
+    except KeyboardInterrupt:           # a second signal while the first one's line was printed
+        status = 130
+    except Terminated:
+        status = EXIT_TERMINATED
     if status in (130, EXIT_TERMINATED):
         import identification
 
@@ -315,10 +363,13 @@ def _main(argv=None) -> int:
         print("cleatfmu: error: stdout: closed (the result would be lost); redirect it to a file or a pipe",
               file=sys.stderr)
         return 2
-    global _signalled
-    _signalled = 0
-    previous = _catch_sigterm()
+    global _signalled, _ended
+    _signalled, _ended = 0, False
+    previous = None
     try:
+        previous = _previous_sigterm()
+        if previous is not None:
+            signal.signal(signal.SIGTERM, _raise_terminated)
         _answer_early_interrupt()
         return _run(argv)
     except BrokenPipeError:
@@ -338,11 +389,8 @@ def _main(argv=None) -> int:
         print("cleatfmu: " + ("terminated" if _signalled == EXIT_TERMINATED else "interrupted"), file=sys.stderr)
         return _signalled
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
-        if _signalled == EXIT_TERMINATED:          # no retry of SIGTERM may outlive the run
-            signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, signal.SIG_DFL)
+        _ended = True           # (set here, before a call gives a pending signal the chance to run)
+        _restore_signals(previous)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,106 @@
+"""A terminated run that does not unwind (a library swallows the exception) is ended after its grace time
+with its output under way undone: the previous folder set back, the new set and the lock gone, a file it
+had replaced restored, its temporaries removed; exit 143 with one line.  Also: a SIGTERM in the first
+instants of the command, and one after its end, never end in a traceback."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals")
+
+_CHILD = textwrap.dedent("""
+    import sys, time
+    from pathlib import Path
+    from identification.cli import command_line as cl
+    from identification._files import OutputFolders, atomic_write_bytes, temp_beside
+    from identification._folders import FolderSet
+
+    root = Path(sys.argv[1])
+    cl.TERMINATE_GRACE_S = 0.5
+
+    def stubborn(argv):
+        with OutputFolders():
+            atomic_write_bytes({root / "params.json": b"new"})
+            with FolderSet(root / "out") as new:
+                (new / "report.html").write_text("new")
+                temp_beside(root / "tire.fmu", ".part")
+                print("ready", flush=True)
+                while True:                 # a library that swallows every exception, Terminated too
+                    try:
+                        time.sleep(0.01)
+                    except BaseException:
+                        pass
+
+    cl._run = stubborn
+    sys.exit(cl.main([]))
+""")
+
+
+def test_a_run_that_swallows_sigterm_is_ended_with_its_output_undone(tmp_path):
+    (tmp_path / "params.json").write_bytes(b"old")
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "report.html").write_text("old")
+    proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(tmp_path)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline() == "ready\n"
+    assert any(p.name.startswith("out.cleatfmu-new-") for p in tmp_path.iterdir())     # under way
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=30)
+    assert proc.returncode == 143, stderr
+    assert time.monotonic() - t0 < 10.0
+    assert stderr.strip().splitlines() == ["cleatfmu: terminated"], stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "params.json"]
+    assert (tmp_path / "params.json").read_bytes() == b"old"
+    assert [p.name for p in (tmp_path / "out").iterdir()] == ["report.html"]
+    assert (tmp_path / "out" / "report.html").read_text() == "old"
+
+
+_EDGES = textwrap.dedent("""
+    import os, signal, sys
+    sys.argv[0] = "-m"              # as ``python -m identification.cli``: the program's own signal handling
+    from identification.cli import command_line as cl
+
+    where = sys.argv[1]
+    if where == "installing":       # SIGTERM pending while the command's handler is being installed
+        real = signal.signal
+        def install(signum, handler):
+            previous = real(signum, handler)
+            if signum == signal.SIGTERM and handler is cl._raise_terminated:
+                os.kill(os.getpid(), signal.SIGTERM)
+            return previous
+        signal.signal = install
+        cl._run = lambda argv: 0
+    else:                           # SIGTERM and Ctrl-C while the handlers are restored after the command
+        real_restore = cl._restore_signals
+        def restore(previous):
+            os.kill(os.getpid(), signal.SIGINT)
+            os.kill(os.getpid(), signal.SIGALRM if where == "retry" else signal.SIGTERM)
+            real_restore(previous)
+        cl._restore_signals = restore
+        def command(argv):
+            if where == "retry":    # a retry of SIGTERM armed in fragile code, pending at the end
+                cl._signalled = cl.EXIT_TERMINATED
+                signal.signal(signal.SIGALRM, cl._raise_terminated)
+            return 0
+        cl._run = command
+    sys.exit(cl.main([]))
+""")
+
+
+@pytest.mark.parametrize("where", ["installing", "ended", "retry"])
+def test_a_signal_at_the_edges_of_the_command_gives_no_traceback(where):
+    res = subprocess.run([sys.executable, "-c", _EDGES, where], capture_output=True, text=True, timeout=60)
+    assert "Traceback" not in res.stderr and "Exception ignored" not in res.stderr, res.stderr
+    if where == "installing":
+        assert res.returncode == 143 and res.stderr.strip() == "cleatfmu: terminated", res.stderr
+    elif where == "ended":         # the command had ended: SIGTERM, back to its default, ends the process
+        assert res.returncode in (0, -signal.SIGTERM), res.stderr
+    else:                          # the pending retry is dropped: the command's own status
+        assert res.returncode == 0, (res.returncode, res.stderr)
