@@ -72,7 +72,11 @@ def test_a_disagreement_with_the_channel_fit_is_said_even_where_it_is_no_check(c
     diag = dataclasses.replace(_diagnosis(pb, start, fit, moved), effects=["axle_coupling"])
     check = free_decay_check(diag)
     assert not check["RL"]["valid"] and check["RL"]["k_apart"] > 1
-    assert check["RL"]["reason"].startswith("RL: the joint fit's k +")
+    assert check["RL"]["reason"].startswith("RL: the joint fit's k +4")
+    assert " % from the channel's waveform fit's " in check["RL"]["reason"]
+    # the other fit's value, in kN/m (it once printed the bare number in N/m in place of whose it was)
+    other_kN = float(check["RL"]["reason"].split("waveform fit's ", 1)[1].split(" kN/m (", 1)[0])
+    assert other_kN == pytest.approx(check["RL"]["k"] / 1e3, rel=1e-3)
     assert "which is no check here (axle_coupling named" in check["RL"]["reason"]
     assert all(check[t]["reason"] is None for t in ("FL", "FR", "RR"))
     diag.extra["free_decay"] = check

@@ -179,16 +179,18 @@ def _compare(fin, tire: str, entry: dict, other: str) -> list:
     sentences = []
     for q in ("k", "c"):
         est, (lo, hi) = fin.params[f"{q}_{tire}"], fin.ci[f"{q}_{tire}"]
-        other, (o_lo, o_hi) = entry[q], entry[f"{q}_ci"]
+        value, (o_lo, o_hi) = entry[q], entry[f"{q}_ci"]
         # each interval's side that faces the other estimate (a log-scale interval is not symmetric)
-        h_joint = (hi - est if other > est else est - lo) if math.isfinite(hi) else math.inf
-        h_decay = o_hi - other if est > other else other - o_lo
+        h_joint = (hi - est if value > est else est - lo) if math.isfinite(hi) else math.inf
+        h_decay = o_hi - value if est > value else value - o_lo
         joint = math.hypot(h_joint, h_decay)
-        apart = abs(est - entry[q]) / joint if joint > 0 else math.inf
+        apart = abs(est - value) / joint if joint > 0 else math.inf
         entry[f"{q}_apart"] = float(apart)
-        entry[f"{q}_outside_decay"] = bool(not (entry[f"{q}_ci"][0] <= est <= entry[f"{q}_ci"][1]))
+        entry[f"{q}_outside_decay"] = bool(not (o_lo <= est <= o_hi))
         if apart > 1:
-            sentences.append(f"{q} {100 * (est / entry[q] - 1):+.1f} % from {other} ({apart:.1f} joint half-widths)")
+            unit = "kN/m" if q == "k" else "kN s/m"
+            sentences.append(f"{q} {100 * (est / value - 1):+.1f} % from {other} {value / 1e3:.4g} {unit} "
+                             f"({apart:.1f} joint half-widths)")
     return sentences
 
 
