@@ -31,11 +31,11 @@ _CHILD = textwrap.dedent("""
                 (new / "report.html").write_text("new")
                 temp_beside(root / "tire.fmu", ".part")
                 print("ready", flush=True)
-                while True:                 # a library that swallows every exception, Terminated too
-                    try:
-                        time.sleep(0.01)
-                    except BaseException:
-                        pass
+                try:                        # a library that swallows every exception, Terminated too
+                    time.sleep(60)
+                except BaseException:
+                    print("swallowed", flush=True)
+                time.sleep(60)
 
     cl._run = stubborn
     sys.exit(cl.main([]))
@@ -50,9 +50,11 @@ def test_a_run_that_swallows_sigterm_is_ended_with_its_output_undone(tmp_path):
                             stderr=subprocess.PIPE, text=True)
     assert proc.stdout.readline() == "ready\n"
     assert any(p.name.startswith("out.cleatfmu-new-") for p in tmp_path.iterdir())     # under way
+    time.sleep(0.3)                 # into its sleep (a signal before it would unwind the run as usual)
     t0 = time.monotonic()
     proc.send_signal(signal.SIGTERM)
-    _, stderr = proc.communicate(timeout=30)
+    stdout, stderr = proc.communicate(timeout=30)
+    assert stdout == "swallowed\n"
     assert proc.returncode == 143, stderr
     assert time.monotonic() - t0 < 10.0
     assert stderr.strip().splitlines() == ["cleatfmu: terminated"], stderr
@@ -104,3 +106,31 @@ def test_a_signal_at_the_edges_of_the_command_gives_no_traceback(where):
         assert res.returncode in (0, -signal.SIGTERM), res.stderr
     else:                          # the pending retry is dropped: the command's own status
         assert res.returncode == 0, (res.returncode, res.stderr)
+
+
+_SWALLOWED = textwrap.dedent("""
+    import signal, sys, time, types
+    sys.argv[0] = "-m"              # as ``python -m identification.cli``: the program's own signal handling
+    from identification.cli import command_line as cl
+
+    importing = types.SimpleNamespace(f_code=types.SimpleNamespace(co_filename="<frozen importlib._bootstrap>"))
+
+    def command(argv):
+        try:                        # Ctrl-C lands in an import lock's weakref callback, which drops exceptions
+            signal.getsignal(signal.SIGINT)(signal.SIGINT, importing)
+        except KeyboardInterrupt:
+            pass
+        time.sleep(2.0)
+        print("went on", flush=True)
+        return 0
+
+    cl._run = command
+    sys.exit(cl.main([]))
+""")
+
+
+def test_ctrl_c_in_code_that_drops_exceptions_is_raised_again_once_out_of_it():
+    """Seen under load: Ctrl-C during an import printed "Exception ignored in ... cb" and the run went on."""
+    res = subprocess.run([sys.executable, "-c", _SWALLOWED], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 130 and res.stderr.strip() == "cleatfmu: interrupted", (res.returncode, res.stderr)
+    assert "went on" not in res.stdout

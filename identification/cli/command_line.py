@@ -179,41 +179,54 @@ def _in_the_standard_library(frame) -> bool:
     return any(part in name for part in _FRAGILE)
 
 
-def _raise_terminated(signum, frame):
-    """SIGTERM (and its retries on SIGALRM): raise :class:`Terminated` where the command is; in fragile
-    standard-library code (:data:`_FRAGILE`), try again 20 ms later; after :data:`TERMINATE_GRACE_S` end the
-    run where it stands.  Once the command has ended (:data:`_ended`) a SIGTERM is only remembered: the
-    run ends with 143 when its signal handlers are restored, and a pending retry is dropped."""
-    global _signalled
-    if signum == signal.SIGALRM and (_signalled != EXIT_TERMINATED or _ended):
+def _raise_now_or_soon(code: int, frame) -> None:
+    """Raise the exception of `code` (:class:`Terminated` for 143, KeyboardInterrupt for 130) where the
+    command is; in fragile standard-library code (:data:`_FRAGILE`: an exception there is printed as
+    "Exception ignored" and dropped, or leaves a lock held) arm a retry 20 ms later instead
+    (:func:`_raise_pending`, on SIGALRM)."""
+    if _in_the_standard_library(frame):
+        if signal.getsignal(signal.SIGALRM) is not _raise_pending:
+            signal.signal(signal.SIGALRM, _raise_pending)
+        signal.setitimer(signal.ITIMER_REAL, 0.02)
         return
+    raise Terminated() if code == EXIT_TERMINATED else KeyboardInterrupt
+
+
+def _raise_pending(signum, frame):
+    """SIGALRM: the retry of a signal that came in fragile code (:func:`_raise_now_or_soon`); nothing once the
+    command has ended (:data:`_ended`)."""
+    if _signalled and not _ended:
+        _raise_now_or_soon(_signalled, frame)
+
+
+def _raise_terminated(signum, frame):
+    """SIGTERM: raise :class:`Terminated` where the command is (or soon, :func:`_raise_now_or_soon`); after
+    :data:`TERMINATE_GRACE_S` end the run where it stands.  Once the command has ended (:data:`_ended`) a
+    SIGTERM is only remembered."""
+    global _signalled, _grace_timer
     if _ended:
         _signalled = _signalled or EXIT_TERMINATED
         return
-    if not _signalled:
+    if _grace_timer is None:
         import threading
 
-        global _grace_timer
         _grace_timer = threading.Timer(TERMINATE_GRACE_S, _force_exit)
         _grace_timer.daemon = True
         _grace_timer.start()
-        signal.signal(signal.SIGALRM, _raise_terminated)
     _signalled = EXIT_TERMINATED
-    if _in_the_standard_library(frame):
-        signal.setitimer(signal.ITIMER_REAL, 0.02)
-        return
-    raise Terminated()
+    _raise_now_or_soon(EXIT_TERMINATED, frame)
 
 
 def _raise_interrupt(signum, frame):
-    """Ctrl-C: raise KeyboardInterrupt where the command is; once it has ended (:data:`_ended`), only
-    remember it (the run then ends with 130)."""
+    """Ctrl-C: raise KeyboardInterrupt where the command is (or soon, :func:`_raise_now_or_soon`: in an import
+    lock's callback it would be dropped and the run go on); once it has ended (:data:`_ended`), only
+    remember it."""
     global _signalled
     if _ended:
         _signalled = _signalled or 130
         return
     _signalled = 130
-    raise KeyboardInterrupt
+    _raise_now_or_soon(130, frame)
 
 
 #: Whether the command has ended (its outcome decided, its clean-up done): a signal from here on raises
@@ -237,8 +250,8 @@ def _previous_sigterm():
 
 
 def _restore_signals(previous) -> None:
-    """End the command's handling of signals: mark it ended (:data:`_ended`), cancel a pending retry of
-    SIGTERM and give SIGTERM its `previous` handler back (Ctrl-C keeps raising nothing: the run is about to
+    """End the command's handling of signals: mark it ended (:data:`_ended`), cancel a pending retry of a
+    signal and the grace timer, and give SIGTERM its `previous` handler back (Ctrl-C keeps raising nothing: the run is about to
     end with its status)."""
     global _ended, _grace_timer
     _ended = True
@@ -248,7 +261,7 @@ def _restore_signals(previous) -> None:
     if previous is None:
         return
     signal.setitimer(signal.ITIMER_REAL, 0)
-    if signal.getsignal(signal.SIGALRM) is _raise_terminated:
+    if signal.getsignal(signal.SIGALRM) is _raise_pending:
         signal.signal(signal.SIGALRM, signal.SIG_IGN)       # drops a retry already pending
         signal.signal(signal.SIGALRM, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, previous)
