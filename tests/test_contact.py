@@ -91,8 +91,12 @@ def test_class_e_at_15_kmh_reports_lift_off_and_its_a_w_matches_an_independent_n
     seat, forces = _independent_seat(road, run.time_s)
     reference = comfort(seat, 1e3, "Wk")
     assert run.comfort.a_w == pytest.approx(reference.a_w, rel=0.01), (run.comfort.a_w, reference.a_w)
+    step = float(run.time_s[1] - run.time_s[0])
     for j, t in enumerate(TIRES):
         assert lost[t] == pytest.approx(np.mean(forces[j] <= 0.0), abs=0.003), (t, lost[t])
+        independent = episodes(forces[j] <= 0.0, step)     # how long and how often, as solve_ivp has it
+        assert run.contact["lost_contact"][t]["longest_s"] == pytest.approx(independent["longest_s"], abs=0.005)
+        assert run.contact["lost_contact"][t]["episodes"] == pytest.approx(independent["episodes"], rel=0.1, abs=2)
 
 
 def test_episodes_count_runs_and_durations():
@@ -108,12 +112,15 @@ def test_contact_summary_warns_above_the_threshold_only():
     def one(share, law="lift-off", lost=None):
         r = {"law": law, "tension": {t: {"share": share, "longest_s": 0.1, "largest_pull": 1.5} for t in TIRES}}
         if law == "lift-off":
-            r["lost_contact"] = {t: {"share": lost} for t in TIRES}
+            r["lost_contact"] = {t: {"share": lost, "episodes": 3 if lost else 0, "longest_s": 0.02 + lost}
+                                 for t in TIRES}
         return r
     quiet = contact_summary([one(0.02, lost=0.005), one(0.0, "linear")], TIRES)
     assert quiet["warning"] is None and quiet["lost_contact_share"]["FL"] == pytest.approx(0.0025)
     loud = contact_summary([one(0.05, lost=0.03), one(0.01, lost=0.01)], TIRES)
     assert "off the ground 2.0%" in loud["warning"] and loud["lift_off_rides"] == 2
+    assert loud["longest_lost_contact_s"]["FL"] == pytest.approx(0.05) and loud["lost_contact_episodes"]["RR"] == 3
+    assert quiet["lost_contact_episodes"]["FL"] == 1.5          # the linear ride counts none
     linear = contact_summary([one(0.05, "linear")], TIRES)
     assert "pulls the hub 5.0%" in linear["warning"]
 
@@ -128,3 +135,7 @@ def test_ride_cli_on_class_e_reports_lost_contact_and_warns_in_one_line(cli):
     assert c["lift_off_rides"] == 2 and max(c["lost_contact_share"].values()) > LOST_CONTACT_WARN_SHARE
     assert max(c["tension_share"].values()) > 0.02 and c["warning"]
     assert res.err.count("\n") == 1 and res.err.startswith("cleatfmu: warning: set final: tire ")
+    assert max(c["longest_lost_contact_s"].values()) > 0 and max(c["lost_contact_episodes"].values()) >= 1
+    text = cli("ride", "--example", "7kmh", "--road", "E", "--speed-kmh", "15", "--compare", "final",
+               "--realisations", "2")
+    assert text.code == 0 and " times per road, at most " in text.out, text.out

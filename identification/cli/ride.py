@@ -281,6 +281,10 @@ def format_contact(doc: dict) -> str:
         if c["lift_off_rides"]:
             lost = " ".join(f"{t} {v:.2%}" for t, v in c["lost_contact_share"].items())
             line += f"; lift-off law on {c['lift_off_rides']} of {c['rides']} roads: off the ground {lost}"
+            if any(v > 0 for v in c["lost_contact_share"].values()):
+                times = " ".join(f"{t} {v:.1f}" for t, v in c["lost_contact_episodes"].items())
+                line += (f", {times} times per road, at most {max(c['longest_lost_contact_s'].values()) * 1e3:.0f} "
+                         f"ms at a time")
         lines.append(line)
     return "\n".join(lines)
 

@@ -76,7 +76,9 @@ def contact_summary(per_ride: list, tires, threshold: float = LOST_CONTACT_WARN_
     dict
         ``lift_off_rides`` (rides run with the lift-off law), per tire the mean and largest ``tension_share``
         (linear law), the longest tension episode and largest pull, the mean and largest
-        ``lost_contact_share`` (lift-off law; a ride without tension counts 0), and ``warning`` (one line,
+        ``lost_contact_share`` (lift-off law; a ride without tension counts 0), the longest time off the ground
+        ``longest_lost_contact_s`` and the mean number of times per ride ``lost_contact_episodes`` (a ride
+        without tension counts 0), and ``warning`` (one line,
         or None): the largest mean share of lost contact (or of tension, with the linear law only) above
         `threshold`.
     """
@@ -84,7 +86,8 @@ def contact_summary(per_ride: list, tires, threshold: float = LOST_CONTACT_WARN_
     lift = [r for r in per_ride if r["law"] == "lift-off"]
     doc = {"rides": n, "lift_off_rides": len(lift), "threshold": threshold,
            "tension_share": {}, "tension_share_max": {}, "longest_tension_s": {}, "largest_pull": {},
-           "lost_contact_share": {}, "lost_contact_share_max": {}}
+           "lost_contact_share": {}, "lost_contact_share_max": {}, "longest_lost_contact_s": {},
+           "lost_contact_episodes": {}}
     for t in tires:
         tension = [r["tension"][t]["share"] for r in per_ride]
         doc["tension_share"][t] = float(np.mean(tension))
@@ -94,6 +97,9 @@ def contact_summary(per_ride: list, tires, threshold: float = LOST_CONTACT_WARN_
         lost = [r["lost_contact"][t]["share"] if "lost_contact" in r else 0.0 for r in per_ride]
         doc["lost_contact_share"][t] = float(np.mean(lost))
         doc["lost_contact_share_max"][t] = float(np.max(lost))
+        landed = [r["lost_contact"][t] for r in per_ride if "lost_contact" in r]
+        doc["longest_lost_contact_s"][t] = float(max((e["longest_s"] for e in landed), default=0.0))
+        doc["lost_contact_episodes"][t] = float(sum(e["episodes"] for e in landed) / n) if n else 0.0
     doc["warning"] = None
     if lift:
         worst = max(tires, key=lambda t: doc["lost_contact_share"][t])
