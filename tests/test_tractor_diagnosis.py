@@ -196,7 +196,7 @@ def test_the_diagnosed_tractor_rides_like_the_rigs_on_an_iso_8608_road(test_day)
 
     truth, diag = test_day["testday_7kmh"]
     rec = diag.problem.rec
-    body, sets, how = parameter_sets(rec, ["paper", "final", "static=300e3"], diagnosis=diag)
+    body, sets, how, _ = parameter_sets(rec, ["paper", "final", "static=300e3"], diagnosis=diag)
     assert how == "diagnosed rigid tractor"
     tires = ("FL", "FR", "RL", "RR")
     rig_body = Body(tires, tuple(truth["tires"][t]["load_N"] for t in tires), rec.wheelbase_m, pitch=True, roll=True,

@@ -81,6 +81,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="processes of the diagnosis (default: 2 or the CPU count)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.add_argument("--plot", metavar="OUT.png", help="write the seat's acceleration and a_w, VDV per set")
+    p.add_argument("--enveloping", choices=("diagnosed", "off"), default="diagnosed",
+                   help="every set's tires roll with the footprints the diagnosis fitted where it named "
+                        "enveloping (the road averaged over each footprint), or ('off') on the point under them "
+                        "(default diagnosed)")
     p.add_argument("--ssp", metavar="DIR", help="also write each set's ride as an SSP 1.0 system of native FMUs "
                                                 "(body, four tires, road profile): DIR/<set>.ssp")
     p.set_defaults(func=run)
@@ -171,7 +175,8 @@ def run(args) -> int:
                                     exposure_h=args.exposure_h, workers=args.workers, ssp_dir=ssp_dir,
                                     realisations=args.realisations, tires=args.tires,
                                     seat_height_m=args.seat_height_m, body_doc=args.body, seat=args.seat_model,
-                                    road=road if road is not None else {"coherence": args.coherence})
+                                    road=road if road is not None else {"coherence": args.coherence},
+                                    enveloping=args.enveloping == "diagnosed")
         if ssp_dir is not None:
             doc["ssp"] = {name: str(Path(args.ssp) / Path(p).name) for name, p in doc["ssp"].items()}
     if road is not None:
@@ -202,6 +207,13 @@ def run(args) -> int:
             ks = "/".join(f"{r.k[t] / 1e3:.0f}" for t in r.k)
             a8 = r.comfort.exposure.a8 if r.comfort.exposure else float("nan")
             print(f"{name:<16}{ks:>24}{r.comfort.a_w:>10.3f}{r.comfort.vdv:>8.3f}{r.comfort.mtvv:>8.3f}{a8:>8.3f}")
+        footprint = next((r.footprints for r in runs.values() if r.footprints), None)
+        if footprint:
+            lengths = ", ".join(f"{axle} {v[0]:.2f} m" for axle, v in (
+                ("front", [v for t, v in footprint.items() if t.startswith("F")]),
+                ("rear", [v for t, v in footprint.items() if t.startswith("R")])) if v)
+            print(f"tires: every set's roll with the footprints the diagnosis fitted ({lengths}; enveloping): road "
+                  f"waves shorter than a footprint are averaged out (--enveloping off: point contact)")
         print(format_expected(doc))
         print(format_contact(doc))
         print(format_axes(doc))

@@ -136,7 +136,7 @@ def seat_transfer(body: Body, k: dict, c: dict, row, frequency_hz) -> np.ndarray
 
 
 def psd_rating(body: Body, k: dict, c: dict, row, *, road, speed_m_s: float, weighting: str = "Wk",
-               points: int = PSD_POINTS, transfer=None) -> float:
+               points: int = PSD_POINTS, transfer=None, footprints_m: dict | None = None) -> float:
     """Expected weighted RMS acceleration of a body point on a road class, from the PSD (module docstring).
 
     Parameters
@@ -154,6 +154,9 @@ def psd_rating(body: Body, k: dict, c: dict, row, *, road, speed_m_s: float, wei
     transfer : callable, optional
         A further linear stage from the point to the rated acceleration, ``transfer(frequency_hz)`` -> complex
         (e.g. a suspended seat's :meth:`~identification.comfort.seat.SeatModel.transmissibility`).
+    footprints_m : dict, optional
+        Tire -> footprint length, m (parabolic pressure): that tire's road is its footprint average, whose
+        response (:func:`identification.model.ride.footprint_response`) multiplies its column of H.
 
     Returns
     -------
@@ -172,6 +175,9 @@ def psd_rating(body: Body, k: dict, c: dict, row, *, road, speed_m_s: float, wei
     h = seat_transfer(body, k, c, row, f) * np.exp(-2j * math.pi * f[:, None] * delay[None, :])
     if transfer is not None:
         h = h * np.asarray(transfer(f))[:, None]
+    if footprints_m:
+        from ..model.ride import footprint_response
+        h = h * np.column_stack([footprint_response(n, float(footprints_m.get(t, 0.0))) for t in body.tires])
     hl, hr = h[:, left], h[:, ~left]
     # Σ_ij H_i S_ij H_j*: S_ij = S on the same track, γ S across the tracks
     total = (np.abs(hl.sum(axis=1)) ** 2 + np.abs(hr.sum(axis=1)) ** 2
@@ -190,7 +196,8 @@ def rating_values(result) -> dict:
 
 
 def expected_set(per_ride: list, *, body: Body, k: dict, c: dict, row, road, speed_m_s: float,
-                 seeds: list, level: float = LEVEL, rows: dict | None = None, seat=None) -> dict:
+                 seeds: list, level: float = LEVEL, rows: dict | None = None, seat=None,
+                 footprints_m: dict | None = None) -> dict:
     """One parameter set's expected ratings over its rides on the realisations (JSON-ready, SI units).
 
     Parameters
@@ -204,6 +211,8 @@ def expected_set(per_ride: list, *, body: Body, k: dict, c: dict, row, road, spe
     rows : dict, optional
         The seat's ``x`` and ``y`` rows (:func:`identification.comfort.seat_axes.axis_rows`): their a_w from the
         PSD (Wd) as well.
+    footprints_m : dict, optional
+        The set's tires' footprints (:func:`psd_rating`).
     seat : SeatModel, optional
         A suspended seat rated on the z axis: the a_w from the PSD is the linear seat's (no end-stop
         contact), with the floor's (``psd.floor_a_w``) and their ratio (``psd.seat_factor_linear``).
@@ -218,14 +227,16 @@ def expected_set(per_ride: list, *, body: Body, k: dict, c: dict, row, road, spe
     for key in per_ride[0]:
         doc[key] = summarise([r[key] for r in per_ride], level)
     predicted = psd_rating(body, k, c, row, road=road, speed_m_s=speed_m_s, weighting="Wk",
-                           transfer=None if seat is None else seat.transmissibility)
+                           transfer=None if seat is None else seat.transmissibility, footprints_m=footprints_m)
     rms = float(math.sqrt(np.mean([r["a_w"] ** 2 for r in per_ride])))
     doc["psd"] = {"a_w": predicted, "monte_carlo_rms_a_w": rms, "ratio": rms / predicted if predicted > 0 else None}
     if seat is not None:
-        floor = psd_rating(body, k, c, row, road=road, speed_m_s=speed_m_s, weighting="Wk")
+        floor = psd_rating(body, k, c, row, road=road, speed_m_s=speed_m_s, weighting="Wk",
+                           footprints_m=footprints_m)
         doc["psd"].update(floor_a_w=floor, seat_factor_linear=predicted / floor if floor > 0 else None)
     for axis in ("x", "y") if rows is not None else ():
-        doc["psd"][f"{axis}_a_w"] = psd_rating(body, k, c, rows[axis], road=road, speed_m_s=speed_m_s, weighting="Wd")
+        doc["psd"][f"{axis}_a_w"] = psd_rating(body, k, c, rows[axis], road=road, speed_m_s=speed_m_s,
+                                               weighting="Wd", footprints_m=footprints_m)
         if f"{axis}_a_w" in per_ride[0]:
             doc["psd"][f"{axis}_monte_carlo_rms_a_w"] = float(math.sqrt(np.mean([r[f"{axis}_a_w"] ** 2
                                                                                  for r in per_ride])))

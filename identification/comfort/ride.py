@@ -76,9 +76,12 @@ class RideRun:
     contact: dict | None = None  # the law rated ("linear" or "lift-off"), tension and lost contact per tire
     axes: object = None        # ThreeAxisResult: the seat's x, y, z
     suspension: object = None  # SeatRide: the suspended seat on the floor (None: the seat is the floor)
+    footprints: dict | None = None   # tire -> footprint length, m (the road averaged over it), or point contact
 
     def to_json(self) -> dict:
         doc = {"k": self.k, "c": self.c, **self.comfort.to_json()}
+        if self.footprints:
+            doc["footprint_m"] = self.footprints
         if self.contact is not None:
             doc["contact"] = self.contact
         if self.axes is not None:
@@ -90,7 +93,7 @@ class RideRun:
 
 def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, seat_x_m: float | None = None,
          seat_y: float = 0.0, step_s: float = 1e-3, exposure_h: float | None = None, tires: str = "linear",
-         seat_height_m: float | None = None, seat=None) -> dict:
+         seat_height_m: float | None = None, seat=None, footprints: dict | None = None) -> dict:
     """Drive the tractor over `road` once per tire parameter set; the seat's Wk rating of each.
 
     Parameters
@@ -121,6 +124,10 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
     seat : SeatModel, optional
         A suspended seat (:mod:`identification.comfort.seat`) on the floor at the seat's point, stepped
         from the start of the ride: the z axis is rated on it (x and y stay floor values).
+    footprints : dict, optional
+        Set name -> {tire: footprint length, m}: those tires roll on their track averaged over the footprint
+        (the diagnosis's ``enveloping``; :func:`identification.model.ride.enveloped_track`), the others on
+        the point under them.
 
     Returns
     -------
@@ -148,7 +155,8 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
     J = body.matrices()[0]
     out = {}
     for name, (k, c) in sets.items():
-        laws = [_point_contact(k[t], c[t], load) for t, load in zip(body.tires, body.loads_n)]
+        fp = (footprints or {}).get(name) or {}
+        laws = [_point_contact(k[t], c[t], load, fp.get(t, 0.0)) for t, load in zip(body.tires, body.loads_n)]
         model = ride_model(body, laws, speed_m_s=speed_m_s, road_x_m=road.x_m, road_left_m=road.left_m,
                            road_right_m=road.right_m)
         traj = run_model(model, *model.grid(0.0, duration_s, step_s))
@@ -172,14 +180,20 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
         out[name] = RideRun(name, {t: float(k[t]) for t in body.tires}, {t: float(c[t]) for t in body.tires},
                             traj.time_s[keep], z, rating, contact,
                             three_axis(rows["x"] @ qdd, rows["y"] @ qdd, z, 1.0 / step_s, exposure_h=exposure_h),
-                            suspension)
+                            suspension, {t: float(fp[t]) for t in body.tires if fp.get(t)} or None)
     return out
 
 
-def _point_contact(k: float, c: float, load: float) -> dict:
+def _point_contact(k: float, c: float, load: float, footprint_m: float = 0.0) -> dict:
+    """The tire law of a ride: k, c under its static load; with a footprint (m) the road is averaged over it
+    with a parabolic pressure (:func:`identification.model.ride.enveloped_track`), as the diagnosis's
+    ``enveloping`` averages the cleat."""
     from ..model import tire_law
 
-    return dict(tire_law.EXTENDED_DEFAULTS, stiffness=float(k), damping=float(c), static_load=float(load))
+    law = dict(tire_law.EXTENDED_DEFAULTS, stiffness=float(k), damping=float(c), static_load=float(load))
+    if footprint_m > 0:
+        law.update(footprint_length=float(footprint_m), parabolic_pressure=True)
+    return law
 
 
 #: The report's ride: road class, first seed, duration (s), road realisations, tire law and parameter sets
@@ -202,7 +216,7 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
                     duration_s: float = 60.0, seat_x_m: float | None = None, seat_y: float = 0.0,
                     exposure_h: float | None = 8.0, diagnosis=None, workers: int = 1, ssp_dir=None,
                     realisations: int = 1, tires: str = "linear", seat_height_m: float | None = None,
-                    body_doc=None, seat=None, road=None) -> tuple:
+                    body_doc=None, seat=None, road=None, enveloping: bool = True) -> tuple:
     """The recording's tractor on ISO 8608 roads with each parameter set: (runs, JSON document).
 
     Combines :func:`parameter_sets`, :func:`identification.comfort.road.road_profile` (grid ROAD_SPACING_M)
@@ -218,6 +232,9 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
     stops, with their expected values; the SSP systems hold the floor only.  `road`: None, or a dict of
     further :func:`~identification.comfort.road.road_profile` keywords for the generated roads (e.g.
     ``{"coherence": "class"}``), or a RoadProfile to ride on alone (one ride; `road_class`, `realisations` unused).
+    With `enveloping` (the default), where the diagnosis named ``enveloping``, every set's tires roll with the
+    footprints it fitted (the tires' geometry; the sets differ in k and c; ``sets.<name>.footprint_m``).  The
+    SSP systems hold point-contact tires only: `ssp_dir` with such footprints is refused.
     """
     from .contact import contact_summary
     from .expected import expected_set, rating_values, realisation_seeds
@@ -228,15 +245,20 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
     options = dict(road or {}) if given is None else {}             # further road_profile keywords
     seeds = realisation_seeds(seed, 1 if given is not None else realisations)
     speed = rec.speed_m_s if speed_m_s is None else float(speed_m_s)
-    body, sets, how = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers, body_doc=body_doc,
-                                     speed_m_s=speed)
+    body, sets, how, footprint = parameter_sets(rec, names, diagnosis=diagnosis, workers=workers,
+                                                body_doc=body_doc, speed_m_s=speed)
+    footprints = {name: footprint for name in sets} if enveloping and footprint else {}
+    if footprints and ssp_dir is not None:
+        raise InputError("--ssp", "the tires ride with the footprints the diagnosis fitted (enveloping), which "
+                                  "the SSP systems' point-contact tires cannot carry; add --enveloping off to "
+                                  "ride and write every set at point contact")
     every = []
     for s in seeds:
         road_s = given if given is not None else road_profile(road_class, speed * duration_s + 1.0, ROAD_SPACING_M,
                                                               s, **options)
         every.append(ride(body, sets, road=road_s, speed_m_s=speed, duration_s=duration_s, seat_x_m=seat_x_m,
                           seat_y=seat_y, exposure_h=exposure_h, tires=tires,
-                          seat_height_m=seat_height_m, seat=seat))
+                          seat_height_m=seat_height_m, seat=seat, footprints=footprints))
         if len(every) == 1:
             road = road_s                       # seed's own road: the runs returned, the SSP archives
     runs = every[0]
@@ -258,7 +280,8 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
         per_ride = [{**rating_values(e[name].comfort), **e[name].axes.values(),
                      **(e[name].suspension.values() if seat is not None else {})} for e in every]
         doc["sets"][name]["expected"] = expected_set(per_ride, body=body, k=k, c=c, row=rows["z"], road=road,
-                                                     speed_m_s=speed, seeds=seeds, rows=rows, seat=seat)
+                                                     speed_m_s=speed, seeds=seeds, rows=rows, seat=seat,
+                                                     footprints_m=footprints.get(name))
         doc["sets"][name]["expected"]["contact"] = contact_summary([e[name].contact for e in every], body.tires)
         if name.startswith("map="):      # the map's values at the speed, with their bands and extrapolation
             doc["sets"][name]["map"] = map_set(name[4:], speed, body.tires)[2]

@@ -9,6 +9,7 @@ import math
 from ..errors import InputError
 from ..identify.tire_map import map_set
 from ..model.tractor import Body
+from ..recording import FRONT_TIRES
 
 __all__ = ["parameter_sets", "check_set_names"]
 
@@ -29,6 +30,15 @@ def _documented_body(rec, body_doc, source) -> tuple:
     except (KeyError, TypeError, ValueError):
         raise InputError(source, "not a 'cleatfmu diagnose --json' whole-tractor document: tires.<TIRE>.k and "
                                  ".c of FL, FR, RL, RR needed") from None
+    footprint = {}
+    if "enveloping" in (doc.get("effects") or []):
+        try:
+            footprint = {t: float(doc["tires"][t]["parameters"]["footprint"]["value"]) for t in TIRES}
+        except (KeyError, TypeError, ValueError):
+            raise InputError(source, "names enveloping but gives no tires.<TIRE>.parameters.footprint.value") \
+                from None
+        if not all(0 < v < 5 for v in footprint.values()):
+            raise InputError(source, f"footprint lengths must be between 0 and 5 m, got {footprint}")
     body = Body(TIRES, tuple(rec.wheel_load_N[t] for t in TIRES), rec.wheelbase_m,
                 pitch="axle_coupling" in settings["body_effects"], roll="roll_coupling" in settings["body_effects"],
                 pivot=settings["front_axle"] == "pivot", pitch_index=idx.get("pitch_index", 1.0),
@@ -37,7 +47,7 @@ def _documented_body(rec, body_doc, source) -> tuple:
     from pathlib import PureWindowsPath
 
     origin = PureWindowsPath(str(settings["recording"])).name if settings["recording"] else "its recording"
-    return body, final, f"{what} of {PureWindowsPath(source).name} (diagnosed from {origin})"
+    return body, final, f"{what} of {PureWindowsPath(source).name} (diagnosed from {origin})", footprint
 
 
 def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1, body_doc=None, speed_m_s=None) -> tuple:
@@ -65,9 +75,10 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1, body_doc=Non
 
     Returns
     -------
-    (Body, dict, str)
+    (Body, dict, str, dict)
         The diagnosed body (the rigid tractor with typical indices when the diagnosis named no body
-        coupling), ``name -> (k, c)``, and how the body was obtained.
+        coupling), ``name -> (k, c)``, how the body was obtained, and the final model's footprint length per
+        tire (m) where the diagnosis named ``enveloping`` (else empty).
     """
     from ..diagnose.joint_select import diagnose_tractor
     from ..diagnose.joint_timing import BODY_DEFAULTS
@@ -78,13 +89,15 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1, body_doc=Non
     if missing:
         raise InputError(rec.source, f"a ride needs all four hubs; no channel {', '.join(missing)}")
     if body_doc is not None and diagnosis is None:
-        body, final, how = _documented_body(rec, body_doc, None)
+        body, final, how, footprint = _documented_body(rec, body_doc, None)
     else:
         diag = diagnosis or diagnose_tractor(rec, workers=workers)
         theta = diag.final.params
         body = diag.final.model.body(theta)
         how = "diagnosed " + ("rigid tractor" if body.kind == "rigid" else "tractor with a pivoting front axle")
         final = ({t: theta[f"k_{t}"] for t in TIRES}, {t: theta[f"c_{t}"] for t in TIRES})
+        footprint = {t: float(theta[f"footprint_{'front' if t in FRONT_TIRES else 'rear'}"]) for t in TIRES} \
+            if "enveloping" in diag.effects else {}
     if body.kind not in ("rigid", "pivot"):
         body = Body(TIRES, tuple(rec.wheel_load_N[t] for t in TIRES), rec.wheelbase_m, pitch=True, roll=True,
                     pitch_index=BODY_DEFAULTS["pitch_index"], roll_index=BODY_DEFAULTS["roll_index"])
@@ -109,7 +122,7 @@ def parameter_sets(rec, names, *, diagnosis=None, workers: int = 1, body_doc=Non
         else:
             k = _stiffness(name)
             sets[name] = ({t: k for t in TIRES}, final[1])
-    return body, sets, how
+    return body, sets, how, footprint
 
 
 def check_set_names(names, *, recording=None) -> list:
