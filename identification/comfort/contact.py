@@ -9,8 +9,8 @@ lift-off law, whose seat acceleration is then the rating's; :func:`contact_summa
 counts over the road realisations and words the warning.
 
 The warning threshold :data:`LOST_CONTACT_WARN_SHARE` (1 % of the ride on some tire): beyond it the seat's
-vibration is shaped by the tire's landings, which the point-contact tire (no enveloping of the road's
-short waves, no tire mass) represents only roughly; ISO 8608 class D at 15 km/h already reaches 0.2-1.3 %
+vibration is shaped by the tire's landings, which the tire law (no tire mass; a footprint, where the
+diagnosis fitted one, only averages the road) represents only roughly; ISO 8608 class D at 15 km/h already reaches 0.2-1.3 %
 with the embedded day's tires, class E at 10 km/h 4-8 %.
 """
 
@@ -106,8 +106,8 @@ def contact_summary(per_ride: list, tires, threshold: float = LOST_CONTACT_WARN_
         share = doc["lost_contact_share"][worst]
         if share > threshold:
             doc["warning"] = (f"tire {worst} is off the ground {share:.1%} of the ride (lift-off law; more than "
-                              f"{threshold:.0%}): landings shape the seat's vibration, which a point-contact tire "
-                              f"represents only roughly")
+                              f"{threshold:.0%}): landings shape the seat's vibration, which the tire law (no tire "
+                              f"mass) represents only roughly")
     else:
         worst = max(tires, key=lambda t: doc["tension_share"][t])
         share = doc["tension_share"][worst]
