@@ -110,12 +110,13 @@ def test_diagnose_killed_at_random_times_leaves_the_earlier_fmus_or_the_new_ones
     tmpdir = tmp_path / "tmp"
     tmpdir.mkdir()
     out = tmp_path / "runs" / "fmus"
-    t0 = time.monotonic()
-    first = subprocess.run([sys.executable, "-m", "identification.cli", "diagnose", str(recordings / "earlier" /
-                            "rec.csv"), "--fmu-dir", str(out), "--workers", "2"], capture_output=True, text=True,
-                           env=dict(os.environ, TMPDIR=str(tmpdir)), timeout=600)
+    for folder in (out, tmp_path / "warm" / "fmus"):    # the second run's time, with the FMU binaries cached
+        t0 = time.monotonic()
+        first = subprocess.run([sys.executable, "-m", "identification.cli", "diagnose", str(recordings /
+                                "earlier" / "rec.csv"), "--fmu-dir", str(folder), "--workers", "2"],
+                               capture_output=True, text=True, env=dict(os.environ, TMPDIR=str(tmpdir)), timeout=600)
+        assert first.returncode == 0, first.stderr
     whole_s = time.monotonic() - t0
-    assert first.returncode == 0, first.stderr
     assert sorted(p.name for p in out.iterdir()) == [f"rec_{t}.fmu" for t in K_EARLIER]
     _snapshot(out)
 

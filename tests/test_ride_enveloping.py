@@ -89,3 +89,35 @@ def test_ride_command_rolls_the_tires_on_the_diagnosed_footprints(cli, tmp_path)
                   str(tmp_path / "ssp"))
     assert refused.code == 2 and refused.err.count("\n") == 1 and "--enveloping off" in refused.err
     assert not (tmp_path / "ssp").exists()
+
+
+def test_the_seats_band_spectra_add_up_to_its_weighted_rms_and_average_over_the_roads(cli, tmp_path):
+    """A ride's one-third-octave bands of the seat's weighted x, y, z hold their a_w (Parseval: the bands tile
+    the weighting's range) within 4 %; the expected spectrum over the roads is the root mean square of the rides'
+    bands; the command prints and plots it."""
+    from identification.comfort.spectra import ThirdOctave, expected_bands
+
+    body = Body(TIRES, LOADS, 2.6, pitch=True, roll=True, pitch_index=0.8, roll_index=0.5)
+    sets = {"t": (dict(zip(TIRES, K)), dict(zip(TIRES, C)))}
+    runs = [ride(body, sets, road=road_profile("C", 2.0 * 200.0 + 1.0, ROAD_SPACING_M, s), speed_m_s=2.0,
+                 duration_s=200.0, seat_x_m=2.2, seat_y=0.3)["t"] for s in (1, 2)]
+    for run in runs:        # (Welch's segments cover all but the last few seconds, Hann-weighted)
+        assert math.sqrt(np.sum(run.bands["z"].rms_m_s2 ** 2)) == pytest.approx(run.comfort.a_w, rel=0.04)
+        for axis in ("x", "y", "z"):
+            assert math.sqrt(np.sum(run.bands[axis].rms_m_s2 ** 2)) == pytest.approx(run.axes.axes[axis].a_w,
+                                                                                    rel=0.04)
+    both = expected_bands([r.bands["z"] for r in runs])
+    np.testing.assert_allclose(both.rms_m_s2, np.sqrt((runs[0].bands["z"].rms_m_s2 ** 2 +
+                                                        runs[1].bands["z"].rms_m_s2 ** 2) / 2), rtol=1e-12)
+    with pytest.raises(ValueError):
+        expected_bands([runs[0].bands["z"], ThirdOctave(np.array([1.0]), ["1"], np.array([1.0]))])
+    res = cli("ride", "--example", "7kmh", "--compare", "paper,final", "--realisations", "2", "--bands",
+              "--bands-plot", str(tmp_path / "bands.png"))
+    assert res.code == 0, res.err
+    assert "seat's one-third-octave bands, expected over 2 road(s)" in res.out and "  z (Wk)  Hz " in res.out
+    assert (tmp_path / "bands.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    doc = json.loads(cli("ride", "--example", "7kmh", "--compare", "final", "--realisations", "2", "--json").out)
+    z = doc["sets"]["final"]["expected"]["third_octave"]["z"]
+    assert z["nominal_hz"][0] == "0.5" and z["nominal_hz"][-1] == "80"
+    assert math.sqrt(sum(v ** 2 for v in z["rms_m_s2"])) == pytest.approx(
+        doc["sets"]["final"]["expected"]["psd"]["monte_carlo_rms_a_w"], rel=0.1)

@@ -81,6 +81,11 @@ def add_parser(subparsers) -> None:
     p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="processes of the diagnosis (default: 2 or the CPU count)")
     p.add_argument("--json", action="store_true", help="print JSON (SI units)")
     p.add_argument("--plot", metavar="OUT.png", help="write the seat's acceleration and a_w, VDV per set")
+    p.add_argument("--bands", action="store_true",
+                   help="also print the seat's one-third-octave band spectra (x, y Wd; z Wk), expected over the "
+                        "roads (always in --json, sets.<name>.expected.third_octave)")
+    p.add_argument("--bands-plot", metavar="OUT.png",
+                   help="write the seat's expected one-third-octave band spectra (z, Wk) per set as a figure")
     p.add_argument("--enveloping", choices=("diagnosed", "off"), default="diagnosed",
                    help="every set's tires roll with the footprints the diagnosis fitted where it named "
                         "enveloping (the road averaged over each footprint), or ('off') on the point under them "
@@ -147,6 +152,7 @@ def run(args) -> int:
     names = _check(args)
     road = None if args.road_file is None else _road_file(args.road_file)
     check_output(args.plot, ".png", "plot")
+    check_output(args.bands_plot, ".png", "plot")
     if args.save_road is not None:
         if not args.save_road.lower().endswith((".csv", ".crg")):
             raise InputError(args.save_road, "the road file name must end with .csv or .crg")
@@ -195,6 +201,17 @@ def run(args) -> int:
         from ..report.plots import plot_ride, save_png
         save_png(plot_ride(runs, road_class=doc["road"]["class"], speed_m_s=speed,
                            expected={n: v["expected"] for n, v in doc["sets"].items()}), args.plot)
+    if args.bands_plot:
+        import numpy as np
+
+        from ..comfort.spectra import ThirdOctave
+        from ..report.plots import plot_third_octave, save_png
+
+        spectra = {name: (lambda b: ThirdOctave(np.array(b["centre_hz"]), b["nominal_hz"], np.array(b["rms_m_s2"])))(
+            entry["expected"]["third_octave"]["z"]) for name, entry in doc["sets"].items()
+            if entry["expected"].get("third_octave")}
+        save_png(plot_third_octave(spectra, title=f"seat z (Wk), expected over {doc['road']['realisations']} "
+                                                  f"road(s)"), args.bands_plot)
     if args.json:
         print(json_text(doc))
     else:
@@ -219,9 +236,13 @@ def run(args) -> int:
         print(format_axes(doc))
         if args.seat_model is not None:
             print(format_seat(doc, args.seat))
+        if args.bands:
+            print(format_bands(doc))
         print(f"seat: {doc['seat']['values']}")
         if args.plot:
             print(f"wrote {args.plot}")
+        if args.bands_plot:
+            print(f"wrote {args.bands_plot}")
         if args.save_road:
             print(f"wrote {args.save_road}: the road ridden, both tracks")
         for name, path in doc.get("ssp", {}).items():
@@ -298,6 +319,24 @@ def format_contact(doc: dict) -> str:
                 line += (f", {times} times per road, at most {max(c['longest_lost_contact_s'].values()) * 1e3:.0f} "
                          f"ms at a time")
         lines.append(line)
+    return "\n".join(lines)
+
+
+def format_bands(doc: dict) -> str:
+    """The seat's expected one-third-octave band spectra of a ``ride`` document as text: per axis (x, y Wd;
+    z Wk) a row per band, a column per set, RMS level in dB re 1e-6 m/s²."""
+    sets = {name: e["expected"]["third_octave"] for name, e in doc["sets"].items()
+            if e["expected"].get("third_octave")}
+    if not sets:
+        return "one-third-octave bands: none (the ride is too short for the lowest band)"
+    lines = [f"seat's one-third-octave bands, expected over {doc['road']['realisations']} road(s): RMS level, "
+             f"dB re 1e-6 m/s2"]
+    for axis, weighting in (("z", "Wk"), ("x", "Wd"), ("y", "Wd")):
+        first = next(iter(sets.values()))[axis]
+        lines.append(f"  {axis} ({weighting})  Hz " + "".join(f"{name[:12]:>13}" for name in sets))
+        for i, label in enumerate(first["nominal_hz"]):
+            levels = [b[axis]["level_db_re_1e-6_m_s2"][i] for b in sets.values()]
+            lines.append(f"  {label:>10}    " + "".join(f"{'-' if v is None else f'{v:.1f}':>13}" for v in levels))
     return "\n".join(lines)
 
 

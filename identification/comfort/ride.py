@@ -77,11 +77,14 @@ class RideRun:
     axes: object = None        # ThreeAxisResult: the seat's x, y, z
     suspension: object = None  # SeatRide: the suspended seat on the floor (None: the seat is the floor)
     footprints: dict | None = None   # tire -> footprint length, m (the road averaged over it), or point contact
+    bands: dict | None = None        # axis -> ThirdOctave of the seat's weighted acceleration (x, y Wd; z Wk)
 
     def to_json(self) -> dict:
         doc = {"k": self.k, "c": self.c, **self.comfort.to_json()}
         if self.footprints:
             doc["footprint_m"] = self.footprints
+        if self.bands:
+            doc["third_octave"] = {axis: b.to_json() for axis, b in self.bands.items()}
         if self.contact is not None:
             doc["contact"] = self.contact
         if self.axes is not None:
@@ -180,7 +183,26 @@ def ride(body: Body, sets: dict, *, road, speed_m_s: float, duration_s: float, s
         out[name] = RideRun(name, {t: float(k[t]) for t in body.tires}, {t: float(c[t]) for t in body.tires},
                             traj.time_s[keep], z, rating, contact,
                             three_axis(rows["x"] @ qdd, rows["y"] @ qdd, z, 1.0 / step_s, exposure_h=exposure_h),
-                            suspension, {t: float(fp[t]) for t in body.tires if fp.get(t)} or None)
+                            suspension, {t: float(fp[t]) for t in body.tires if fp.get(t)} or None,
+                            _seat_bands(rows["x"] @ qdd, rows["y"] @ qdd, z, 1.0 / step_s))
+    return out
+
+
+def _seat_bands(acc_x, acc_y, acc_z, sample_rate_hz: float) -> dict | None:
+    """One-third-octave band spectra of the seat's weighted accelerations (x, y Wd; z Wk) over each
+    weighting's band, or None where the ride is too short for the lowest band."""
+    from .iso2631 import get_weighting, weight
+    from .seat_axes import AXIS_WEIGHTINGS
+    from .spectra import third_octave
+
+    out = {}
+    for axis, acc in (("x", acc_x), ("y", acc_y), ("z", acc_z)):
+        w = get_weighting(AXIS_WEIGHTINGS[axis])
+        try:
+            out[axis] = third_octave(weight(acc, sample_rate_hz, w), sample_rate_hz, low_hz=w.band_hz[0],
+                                     high_hz=w.band_hz[1])
+        except InputError:
+            return None
     return out
 
 
@@ -283,6 +305,10 @@ def ride_comparison(rec, names, *, road_class: str = "B", seed: int = 1, speed_m
                                                      speed_m_s=speed, seeds=seeds, rows=rows, seat=seat,
                                                      footprints_m=footprints.get(name))
         doc["sets"][name]["expected"]["contact"] = contact_summary([e[name].contact for e in every], body.tires)
+        if all(e[name].bands for e in every):        # the seat's expected band spectra over the roads
+            from .spectra import expected_bands
+            doc["sets"][name]["expected"]["third_octave"] = {
+                axis: expected_bands([e[name].bands[axis] for e in every]).to_json() for axis in ("x", "y", "z")}
         if name.startswith("map="):      # the map's values at the speed, with their bands and extrapolation
             doc["sets"][name]["map"] = map_set(name[4:], speed, body.tires)[2]
     if "final" in sets and len(every) > 1:    # paired on the same roads: the road-to-road scatter cancels

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["ThirdOctave", "band_centres", "third_octave", "REFERENCE_M_S2"]
+__all__ = ["ThirdOctave", "band_centres", "third_octave", "expected_bands", "REFERENCE_M_S2"]
 
 #: Reference acceleration of the levels, m/s² (ISO 1683).
 REFERENCE_M_S2 = 1e-6
@@ -96,3 +96,15 @@ def third_octave(acc_m_s2, sample_rate_hz: float, *, low_hz: float = 0.5, high_h
         overlap = np.clip(np.minimum(hi_bin, b) - np.maximum(lo_bin, a), 0.0, None)
         power[i] = float(np.sum(psd * overlap))
     return ThirdOctave(centres, labels, np.sqrt(power))
+
+
+def expected_bands(spectra) -> ThirdOctave:
+    """The expected band spectrum of several records of one process (rides on road realisations): each band's
+    RMS is the root of the mean of the records' band mean squares (their bands must be the same)."""
+    spectra = list(spectra)
+    first = spectra[0]
+    if any(s.centre_hz.shape != first.centre_hz.shape or not np.allclose(s.centre_hz, first.centre_hz)
+           for s in spectra):
+        raise ValueError("the spectra have different bands")
+    return ThirdOctave(first.centre_hz, list(first.labels),
+                       np.sqrt(np.mean([s.rms_m_s2 ** 2 for s in spectra], axis=0)))
