@@ -477,3 +477,24 @@ def test_a_result_that_cannot_reach_stdout_leaves_the_files_as_they_were(tmp_pat
             assert sorted(p.name for p in out.iterdir()) == []
         else:
             assert sorted(p.name for p in out.iterdir()) == [made] and (out / made).read_bytes() == older
+
+
+def test_a_sidecar_without_acquisition_is_warned_and_one_with_it_is_not(tmp_path, capsys):
+    """Its models then take an ideal sensor; on the embedded day (a declared chain) that would leave the
+    impacts' residual: one warning line, from every analysis (identify here), and none with the chain."""
+    import shutil
+
+    from identification.recording.condition import NO_ACQUISITION
+    from identification.recording.examples import example_path
+
+    csv = Path(example_path("7kmh"))
+    doc = json.loads(csv.with_suffix(".json").read_text())
+    assert "acquisition" in doc
+    doc.pop("acquisition")
+    shutil.copy(csv, tmp_path / "day.csv")
+    (tmp_path / "day.json").write_text(json.dumps(doc))
+    assert cli.main(["identify", str(tmp_path / "day.csv")]) == 0
+    err = capsys.readouterr().err
+    assert err.count(NO_ACQUISITION) == 1 and f"cleatfmu: warning: {tmp_path / 'day.csv'}: {NO_ACQUISITION}" in err
+    assert cli.main(["identify", "--example", "7kmh"]) == 0
+    assert "acquisition chain" not in capsys.readouterr().err
