@@ -33,7 +33,7 @@ from pathlib import Path
 from .kinds import FmuKind, load_kind, module_source
 from .model_description import complete_model_description
 from .reproducible import GUID_PLACEHOLDER, content_guid, zip_bytes
-from identification._files import publish_path, temp_beside
+from identification._files import publish_path, temp_beside, xml_text
 
 __all__ = ["BACKENDS", "build_fmu", "build_prefix", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
 
@@ -270,6 +270,8 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
     if backend not in k.backends:
         raise ValueError(f"FMU kind {k.name} has no {backend} backend (it has: {', '.join(k.backends)})")
     starts = resolve_start_values(k, start_values)
+    if description is not None:         # a recording's name or a tire key may hold what XML forbids
+        description = xml_text(description)
     if backend == "native":
         return _build_native(k, dest, starts, start_values or {}, provenance, description, fmi_version, platforms,
                              resources)

@@ -21,6 +21,22 @@ __all__ = ["atomic_write_texts", "atomic_write_bytes", "publish_files", "json_te
 INPUT_LIMIT_BYTES = 256 << 20
 
 
+_XML_FORBIDDEN = None
+
+
+def xml_text(text: str) -> str:
+    """`text` with every character XML 1.0 forbids (control characters, lone surrogates, U+FFFE, U+FFFF)
+    written as a ``\\xNN`` or ``\\uNNNN`` escape: any string can then go into an XML attribute or element
+    (a recording's file name, a tire key) and the document still parses."""
+    global _XML_FORBIDDEN
+    if _XML_FORBIDDEN is None:
+        import re
+
+        _XML_FORBIDDEN = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+    return _XML_FORBIDDEN.sub(lambda m: f"\\x{ord(m.group()):02x}" if ord(m.group()) < 0x100
+                              else f"\\u{ord(m.group()):04x}", str(text))
+
+
 def finite_or_none(doc):
     """`doc` with every non-finite number (an interval's unbounded end, a quantity the data cannot give)
     replaced by None, numpy scalars and arrays as Python numbers and lists, tuples as lists."""

@@ -498,3 +498,32 @@ def test_a_sidecar_without_acquisition_is_warned_and_one_with_it_is_not(tmp_path
     assert err.count(NO_ACQUISITION) == 1 and f"cleatfmu: warning: {tmp_path / 'day.csv'}: {NO_ACQUISITION}" in err
     assert cli.main(["identify", "--example", "7kmh"]) == 0
     assert "acquisition chain" not in capsys.readouterr().err
+
+
+def test_names_xml_forbids_are_escaped_in_the_fmu_and_the_ssp(tmp_path):
+    """A recording's name or a tire key with a control character, U+FFFE or a byte not in UTF-8 (a lone
+    surrogate): export exits 0 with a modelDescription.xml that parses, names them as escapes and simulates;
+    the line it prints does not fail on the surrogate.  Before: the XML did not parse (exit 0) and the print
+    ended in a UnicodeEncodeError traceback."""
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    from fmpy import simulate_fmu
+
+    from identification.fmu.ssp import ssd_bytes
+
+    entry = {"k": 550e3, "c": 2500.0, "mass": 1716.2}
+    (tmp_path / "p.json").write_text(json.dumps({"recording": "c\x01d\ufffe\udcff.csv", "speed_kmh": 7.0,
+                                                 "tires": {"F\x02L": entry, "\udcffR": entry}}))
+    for key, arg in (("F\x02L", b"F\x02L"), ("\udcffR", b"\xffR")):
+        fmu = tmp_path / "t.fmu"
+        res = subprocess.run([sys.executable, "-m", "identification.cli", "export", str(tmp_path / "p.json"),
+                              "--tire", arg, "-o", str(fmu), "--platforms", "linux64"], capture_output=True)
+        assert res.returncode == 0 and b"Traceback" not in res.stderr, res.stderr
+        assert res.stdout.startswith(b"wrote ") and b"stiffness 550000 N/m" in res.stdout
+        root = ET.fromstring(zipfile.ZipFile(fmu).read("modelDescription.xml"))
+        assert "recording 'c\\x01d\\ufffe\\udcff.csv'" in root.get("description")
+        assert ("\\x02" if key == "F\x02L" else "\\udcff") in root.get("description")
+        assert simulate_fmu(str(fmu), stop_time=0.05)["time"][-1] == pytest.approx(0.05)
+    ssd = ET.fromstring(ssd_bytes("ride", "a ride on c\x01d\udcff.csv", start_s=0.0, stop_s=1.0, step_s=1e-3))
+    assert ssd.find("{*}System").get("description") == "a ride on c\\x01d\\udcff.csv"

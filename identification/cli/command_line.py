@@ -169,8 +169,9 @@ def _force_exit() -> None:
 
 
 #: Standard-library code where an exception raised by a signal handler is ignored ("Exception ignored in")
-#: or leaves a lock held: the logging module's locks (taken around every fork), the import machinery.
-_FRAGILE = ("logging" + os.sep + "__init__.py", "<frozen importlib")
+#: or leaves a lock held: the logging module's locks (taken around every fork), the import machinery, the
+#: abstract base classes' subclass checks (called from C, which drops the exception).
+_FRAGILE = ("logging" + os.sep + "__init__.py", "<frozen importlib", "<frozen abc>")
 
 
 def _in_the_standard_library(frame) -> bool:
@@ -292,6 +293,8 @@ def _run(argv) -> int:
     try:
         with OutputFolders() as folders:
             status = args.func(args)
+            if _signalled:      # a signal whose exception some library swallowed: the run still ends as its
+                raise Terminated() if _signalled == EXIT_TERMINATED else KeyboardInterrupt   # (output undone)
             _flush_stdout()
             if status:              # a failed command keeps what it wrote (a report of the readable
                 folders.keep()      # recordings), only the folders it made and left empty go
@@ -345,6 +348,16 @@ def main(argv=None) -> int:
     return status
 
 
+def _escape_unprintable_output() -> None:
+    """Write what the output's encoding cannot hold (a lone surrogate of a file name not in UTF-8) as an escape
+    instead of failing with UnicodeEncodeError after the work is done."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.reconfigure(errors="backslashreplace")
+        except (AttributeError, ValueError, io.UnsupportedOperation):
+            pass
+
+
 def _end_now(status: int) -> None:
     """Flush what was written and end the process with `status`, skipping the interpreter's shutdown."""
     for stream in (sys.stdout, sys.stderr):
@@ -378,6 +391,7 @@ def _main(argv=None) -> int:
         return 2
     global _signalled, _ended
     _signalled, _ended = 0, False
+    _escape_unprintable_output()
     previous = None
     try:
         previous = _previous_sigterm()

@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._files import xml_text
 from ..model import TractorModel
 from ..recording import FRONT_TIRES, TIRES
 
@@ -243,6 +244,7 @@ def ssd_bytes(name: str, description: str, *, start_s: float, stop_s: float, ste
     for prefix, uri in _NS.items():
         ET.register_namespace(prefix, uri)
     d, c = _NS["ssd"], _NS["ssc"]
+    name, description = xml_text(name), xml_text(description) if description else description
     root = ET.Element(f"{{{d}}}SystemStructureDescription", {"version": "1.0", "name": name})
     system = ET.SubElement(root, f"{{{d}}}System", {"name": name, **({"description": description}
                                                                         if description else {})})
