@@ -33,7 +33,7 @@ from pathlib import Path
 from .kinds import FmuKind, load_kind, module_source
 from .model_description import complete_model_description
 from .reproducible import GUID_PLACEHOLDER, content_guid, zip_bytes
-from identification._files import publish_path, temp_beside, xml_text
+from identification._files import publish_path, temp_beside, temp_prefix, xml_text
 
 __all__ = ["BACKENDS", "build_fmu", "build_prefix", "resolve_start_values", "project_version", "VERIFIED_PYTHONFMU"]
 
@@ -281,7 +281,7 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
     os.close(fd)
     tmp = Path(tmp_name)
     try:
-        with tempfile.TemporaryDirectory(prefix="cleatfmu_build_") as work:
+        with tempfile.TemporaryDirectory(prefix=temp_prefix("build")) as work:
             stage, out_dir = Path(work, "stage"), Path(work, "out")
             stage.mkdir()
             out_dir.mkdir()

@@ -46,6 +46,7 @@ from .compliance import compliance_problems
 from .kinds import kind_names, load_kind, module_name_conflicts
 from .reference import read_reference
 from .runners import open_fmpy_slave, run_fmpy_loop, run_libcosim, simulate_fmpy, variable_refs
+from identification._files import temp_prefix
 
 __all__ = ["check_kind", "state_round_trip_problems", "compare", "main"]
 
@@ -251,7 +252,7 @@ def main(argv=None) -> int:
         print("check: no FMU kinds found in fmu_src", file=sys.stderr)
         return 1
     failures = [f"module names: {p}" for p in module_name_conflicts([load_kind(k) for k in kind_names()])]
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_check_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("check")) as tmp:
         for kind in kinds:
             for backend, version in [(b, v) for b, v in variants if b in load_kind(kind).backends]:
                 label = f"{kind} ({backend}, FMI {version})"

@@ -28,6 +28,7 @@ from importlib import resources
 from pathlib import Path
 
 from .kinds import FmuKind
+from identification._files import temp_prefix
 
 __all__ = ["PLATFORMS", "FMI_VERSIONS", "cache_dir", "source_files", "law_version", "compile_binary",
            "compile_binaries", "config_problems"]
@@ -177,7 +178,7 @@ def compile_binary(kind: FmuKind, fmi_version: int, platform: str) -> bytes:
     cached = cache_dir() / "native" / key / f"{kind.model_identifier}{ext}"
     if cached.is_file():
         return cached.read_bytes()
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_cc_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("cc")) as tmp:
         src = Path(tmp, "src")
         src.mkdir()
         for name, data in source_files(kind, fmi_version).items():

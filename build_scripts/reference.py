@@ -29,6 +29,7 @@ import numpy as np
 from .build import build_fmu, resolve_start_values
 from .kinds import load_kind
 from .runners import simulate_fmpy
+from identification._files import temp_prefix
 
 __all__ = ["INPUT_SIGNALS", "CLOSED_FORM", "read_reference", "write_reference", "reference_signals",
            "closed_form_outputs", "main"]
@@ -382,7 +383,7 @@ def main(argv=None) -> int:
 
     k = load_kind(args.kind)
     starts = resolve_start_values(k, k.reference_start_values)
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_ref_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("ref")) as tmp:
         fmu = build_fmu(args.kind, Path(tmp) / f"{args.kind}.fmu", backend=k.backends[0])
         de = read_model_description(str(fmu)).defaultExperiment
         signals = reference_signals(args.kind, float(de.startTime), float(de.stopTime), float(de.stepSize), starts)

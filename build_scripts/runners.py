@@ -77,6 +77,8 @@ def open_fmpy_slave(fmu, *, instance_name="instance", logger=None, logging_on=Fa
     import ctypes
     import shutil
     import tempfile
+
+    from identification._files import temp_prefix
     import weakref
 
     from fmpy import extract, read_model_description
@@ -85,7 +87,7 @@ def open_fmpy_slave(fmu, *, instance_name="instance", logger=None, logging_on=Fa
     from fmpy import calloc, free
 
     md = read_model_description(str(fmu), validate=False)
-    unzipped = extract(str(fmu), unzipdir=tempfile.mkdtemp(prefix="cleatfmu_fmu_"))
+    unzipped = extract(str(fmu), unzipdir=tempfile.mkdtemp(prefix=temp_prefix("fmu")))
     slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
                       modelIdentifier=md.coSimulation.modelIdentifier, instanceName=instance_name)
     weakref.finalize(slave, shutil.rmtree, unzipped, ignore_errors=True)

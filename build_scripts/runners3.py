@@ -12,6 +12,7 @@ import tempfile
 import weakref
 
 import numpy as np
+from identification._files import temp_prefix
 
 __all__ = ["open_fmi3_slave", "run_fmi3_loop", "fmi3_state_round_trip_problems"]
 
@@ -42,7 +43,7 @@ def open_fmi3_slave(fmu, *, instance_name="instance", start_values=None, log_mes
     from fmpy.fmi3 import FMU3Slave
 
     md, refs = _refs(fmu)
-    unzipped = extract(str(fmu), unzipdir=tempfile.mkdtemp(prefix="cleatfmu_fmu3_"))
+    unzipped = extract(str(fmu), unzipdir=tempfile.mkdtemp(prefix=temp_prefix("fmu3")))
     slave = FMU3Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
                       instanceName=instance_name)
     weakref.finalize(slave, shutil.rmtree, unzipped, ignore_errors=True)

@@ -129,6 +129,48 @@ def undo_at_forced_exit() -> None:
     _OPEN_TEMPORARIES.clear()
 
 
+_CLEARED_TEMP_FOLDERS = False
+
+
+def temp_prefix(kind: str) -> str:
+    """The name prefix of this process's temporary folders of `kind` (``cleatfmu_<kind>_<pid>-``), for
+    ``tempfile.mkdtemp`` / ``TemporaryDirectory``.  A SIGKILLed run leaves its folders behind (nothing can
+    remove them then); the first call in a process removes those whose process is gone
+    (:func:`clear_dead_temp_folders`)."""
+    clear_dead_temp_folders_once()
+    return f"cleatfmu_{kind}_{os.getpid()}-"
+
+
+def clear_dead_temp_folders_once() -> None:
+    """:func:`clear_dead_temp_folders` of the temporary directory, once per process (every command starts
+    with it)."""
+    global _CLEARED_TEMP_FOLDERS
+    if not _CLEARED_TEMP_FOLDERS:
+        _CLEARED_TEMP_FOLDERS = True
+        clear_dead_temp_folders()
+
+
+def clear_dead_temp_folders(folder=None) -> list[Path]:
+    """Remove the temporary folders (:func:`temp_prefix`) in `folder` (default: the temporary directory) of
+    processes that no longer exist; return them."""
+    import re
+    import shutil
+
+    folder = Path(folder or tempfile.gettempdir())
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for entry in entries:
+        m = re.fullmatch(r"cleatfmu_[a-z0-9]+_(\d+)-.*", entry.name)
+        if m and int(m.group(1)) != os.getpid() and not process_alive(int(m.group(1))) \
+                and entry.is_dir(follow_symlinks=False):
+            shutil.rmtree(entry.path, ignore_errors=True)
+            removed.append(Path(entry.path))
+    return removed
+
+
 def clear_dead_temporaries(path) -> list[Path]:
     """Remove the temporaries (:func:`temp_beside`) of `path` left by processes that no longer exist; return
     them."""

@@ -480,11 +480,12 @@ def test_a_result_that_cannot_reach_stdout_leaves_the_files_as_they_were(tmp_pat
 
 
 def test_a_sidecar_without_acquisition_is_warned_and_one_with_it_is_not(tmp_path, capsys):
-    """Its models then take an ideal sensor; on the embedded day (a declared chain) that would leave the
-    impacts' residual: one warning line, from every analysis (identify here), and none with the chain."""
+    """The joint fit's models then take an ideal sensor; on the embedded day (a declared chain) that would
+    leave the impacts' residual: one warning line from diagnose, none with the chain; identify's free-decay
+    methods do not model the chain and say nothing of it."""
     import shutil
 
-    from identification.recording.condition import NO_ACQUISITION
+    from identification.diagnose.run import NO_ACQUISITION
     from identification.recording.examples import example_path
 
     csv = Path(example_path("7kmh"))
@@ -493,10 +494,12 @@ def test_a_sidecar_without_acquisition_is_warned_and_one_with_it_is_not(tmp_path
     doc.pop("acquisition")
     shutil.copy(csv, tmp_path / "day.csv")
     (tmp_path / "day.json").write_text(json.dumps(doc))
-    assert cli.main(["identify", str(tmp_path / "day.csv")]) == 0
+    assert cli.main(["diagnose", str(tmp_path / "day.csv"), "--json"]) == 0
     err = capsys.readouterr().err
     assert err.count(NO_ACQUISITION) == 1 and f"cleatfmu: warning: {tmp_path / 'day.csv'}: {NO_ACQUISITION}" in err
-    assert cli.main(["identify", "--example", "7kmh"]) == 0
+    assert cli.main(["diagnose", "--example", "7kmh", "--json"]) == 0
+    assert "acquisition chain" not in capsys.readouterr().err
+    assert cli.main(["identify", str(tmp_path / "day.csv")]) == 0
     assert "acquisition chain" not in capsys.readouterr().err
 
 

@@ -3,6 +3,7 @@ is built beside the old one and swapped in whole; a failed run leaves the old on
 is refused; what a killed run left is cleared by the next one."""
 
 import errno
+import json
 import hashlib
 import os
 import signal
@@ -331,3 +332,44 @@ def test_a_set_that_keeps_the_folders_other_files_swaps_in_whole_or_not_at_all(t
 
 def tree_digest(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
+
+
+def test_a_killed_runs_temporary_folders_go_with_the_next_run(tmp_path):
+    """SIGKILL leaves a run's $TMPDIR folders (cleatfmu_<kind>_<pid>-*) behind; the next run's first temporary
+    folder clears those of processes that are gone, and only those."""
+    import signal
+
+    from identification._files import clear_dead_temp_folders
+
+    tmpdir = tmp_path / "tmp"
+    tmpdir.mkdir()
+    params = tmp_path / "p.json"
+    params.write_text(json.dumps({"recording": "r.csv", "speed_kmh": 7.0,
+                                  "tires": {"FL": {"k": 550e3, "c": 2500.0, "mass": 1716.2}}}))
+    env = dict(os.environ, TMPDIR=str(tmpdir))
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    dead = int(gone.stdout)
+    for name in (f"cleatfmu_fmus_{dead}-x1", f"cleatfmu_tractor_{dead}-x2"):
+        (tmpdir / name).mkdir()
+        (tmpdir / name / "FL.fmu").write_bytes(b"left by a killed run")
+    alive = tmpdir / f"cleatfmu_fmus_{os.getpid()}-x3"            # a live run's (this process's)
+    alive.mkdir()
+    other = tmpdir / "cleatfmu_something_else"
+    other.mkdir()
+    res = subprocess.run([sys.executable, "-m", "identification.cli", "export", str(params), "--tire", "FL", "-o",
+                          str(tmp_path / "t.fmu"), "--backend", "native", "--platforms", "linux64"],
+                         capture_output=True, text=True, env=env, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert sorted(p.name for p in tmpdir.iterdir()) == sorted([alive.name, other.name])
+    assert clear_dead_temp_folders(tmpdir) == []
+    proc = subprocess.Popen([sys.executable, "-m", "identification.cli", "diagnose", "--example", "7kmh"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    deadline = time.monotonic() + 120
+    while not any(p.name.startswith(f"cleatfmu_") and f"_{proc.pid}-" in p.name for p in tmpdir.iterdir()):
+        assert proc.poll() is None and time.monotonic() < deadline, "diagnose made no temporary folder"
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert any(f"_{proc.pid}-" in p.name for p in tmpdir.iterdir())       # nothing could remove it
+    assert [p.name for p in clear_dead_temp_folders(tmpdir)] and not any(f"_{proc.pid}-" in p.name
+                                                                         for p in tmpdir.iterdir())

@@ -290,6 +290,9 @@ def _run(argv) -> int:
     except SystemExit:  # --help, --version, a usage error: their output reaches a closed pipe here
         _flush_stdout()
         raise
+    from .._files import clear_dead_temp_folders_once
+
+    clear_dead_temp_folders_once()      # what SIGKILLed runs left in $TMPDIR
     try:
         with OutputFolders() as folders:
             status = args.func(args)

@@ -12,7 +12,7 @@ from .util import (add_example_option, announce_compilation, check_folder, check
 from ..errors import InputError
 from ..diagnose.joint_evidence import interval_text
 from ..diagnose.run import diagnosis_warnings, run_tractor_diagnosis
-from .._files import json_text
+from .._files import json_text, temp_prefix
 
 __all__ = ["add_parser", "run"]
 
@@ -159,7 +159,7 @@ def _diagnose_into(args, rec, tire, long: bool, keep_fmus: bool, new_dir) -> tup
     from pathlib import Path
 
     tick, bar = _progress(f"diagnose {tire or 'tractor'}", long=long)
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_fmus_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("fmus")) as tmp:
         try:
             diag, gain = run_tractor_diagnosis(rec, cutoff_hz=args.cutoff_hz, fmu_dir=tmp if keep_fmus else None,
                                                workers=args.workers, progress=tick)

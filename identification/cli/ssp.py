@@ -13,7 +13,7 @@ from dataclasses import replace
 
 from .util import add_example_option, check_output, read_recording_arg, recording_name_arg, write_files
 from ..errors import InputError
-from .._files import json_text
+from .._files import json_text, temp_prefix
 
 __all__ = ["point_contact_as_builtin", "run", "add_parser"]
 
@@ -60,7 +60,7 @@ def run(args) -> int:
     from pathlib import Path
     import tempfile
 
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_ssp_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("ssp")) as tmp:
         staged = Path(tmp) / (Path(args.output).stem + ".ssp")   # (the writer takes .ssp, the option any case)
         try:
             write_tractor_ssp(staged, record, start_s=start, stop_s=stop, step_s=h, seat_x_m=seat_x,

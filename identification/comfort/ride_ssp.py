@@ -12,6 +12,7 @@ from __future__ import annotations
 import re
 import tempfile
 from pathlib import Path
+from .._files import temp_prefix
 
 __all__ = ["ssp_file_name", "write_ride_ssps"]
 
@@ -37,7 +38,7 @@ def write_ride_ssps(folder, body, sets: dict, *, road, speed_m_s: float, duratio
     names = {name: ssp_file_name(name) for name in sets}
     if len(set(names.values())) != len(names):
         raise ValueError(f"two parameter sets give the same SSP file name: {sorted(names.values())}")
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_ride_ssp_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("ridessp")) as tmp:
         staged = {}
         for name, (k, c) in sets.items():
             laws = [_point_contact(k[t], c[t], load) for t, load in zip(body.tires, body.loads_n)]

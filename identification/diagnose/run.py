@@ -43,6 +43,14 @@ def run_tractor_diagnosis(rec, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, fmu_dir=
     return diag, gain
 
 
+#: The warning of a recording whose sidecar declares no acquisition chain (the joint fit's models then take an
+#: ideal sensor; the free-decay methods do not model the chain and need none).
+NO_ACQUISITION = ("the sidecar declares no acquisition chain (anti-alias filter, high-pass): the joint fit's models "
+                  "take an ideal sensor, the mean acceleration over each sample; a filter they do not know leaves "
+                  "a residual at the impacts (about 5x the noise on point-contact tires) and can bias k and c: "
+                  "declare it under \"acquisition\" (docs/guide/recordings.md)")
+
+
 def diagnosis_warnings(diag, gain) -> list[str]:
     """What the diagnosis itself has to warn of (one sentence each): a cleat profile its footprint models
     approximate, the sensor signs it settled, a refit at the fitted delay's speed, a baseline whose FMUs
@@ -50,7 +58,7 @@ def diagnosis_warnings(diag, gain) -> list[str]:
     before it (:func:`identification.recording.window.focus`)."""
     from .joint_signs import AS_RECORDED, UNDONE
 
-    out = []
+    out = [NO_ACQUISITION] if diag.problem.rec.acquisition is None else []
     profile = diag.problem.rec.cleat_profile
     if profile is not None and not profile.builtin_exact:
         out.append(f"a footprint model carries the cleat_profile as the trapezoid of the same height, width and "

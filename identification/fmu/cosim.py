@@ -49,6 +49,7 @@ import numpy as np
 from ..errors import InputError
 from .master import _WARNING, fmi_error, step_body_fmus, step_fn
 from ..model.scheme import Trajectory, cleat_grid, corner_body, grid_inputs, half_tractor_body, lug_steady_state, tire_inputs
+from .._files import temp_prefix
 
 __all__ = ["TireFmu", "step_fn", "run_quarter_tractor", "run_half_tractor_fmus"]
 
@@ -100,7 +101,7 @@ class TireFmu:
         self.longitudinal = all(n in self.vr for n in LONGITUDINAL)
         _check_binary(path, self.md.coSimulation.modelIdentifier)
         self.slave = None
-        self._dir = tempfile.mkdtemp(prefix="cleatfmu_fmu_")
+        self._dir = tempfile.mkdtemp(prefix=temp_prefix("fmu"))
         try:
             extract(str(path), self._dir, include=_loaded_member)
             self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,

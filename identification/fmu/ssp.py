@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._files import xml_text
+from .._files import temp_prefix, xml_text
 from ..model import TractorModel
 from ..recording import FRONT_TIRES, TIRES
 
@@ -192,7 +192,7 @@ def write_tractor_ssp(path, record: TractorModel, *, start_s: float, stop_s: flo
     layout = system_layout(record, start_s=start_s, seat_x_m=seat_x_m, seat_y=seat_y, initial_q=initial_q,
                            initial_dq=initial_dq)
     files = {}
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_ssp_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("ssp")) as tmp:
         body = build_fmu("tractor_body", Path(tmp, "body.fmu"), backend="native", start_values=layout.body,
                          description=f"Body of system '{name}': {_KIND_TEXT[record.body.kind]} (SI units)")
         files[f"resources/{BODY}.fmu"] = body.read_bytes()

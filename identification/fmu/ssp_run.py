@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .ssp import _NS, BODY, SSD_NAME
+from .._files import temp_prefix
 
 __all__ = ["EXCHANGES", "read_system", "ssd_step", "run_ssp_fmpy", "run_ssp_libcosim", "master_reference", "BODY_OUTPUTS",
            "AGREEMENT", "relative_deviation", "check_ssp"]
@@ -78,7 +79,7 @@ def run_ssp_fmpy(ssp_path, *, step_s: float, stop_s: float | None = None, exchan
     components, connections, (start, stop) = read_system(ssp_path)
     stop = stop if stop_s is None else float(stop_s)
     n = int(round((stop - start) / step_s))
-    tmp = Path(tempfile.mkdtemp(prefix="cleatfmu_ssprun_"))
+    tmp = Path(tempfile.mkdtemp(prefix=temp_prefix("ssprun")))
     slaves, refs = {}, {}
     try:
         with zipfile.ZipFile(ssp_path) as z:
@@ -180,7 +181,7 @@ def run_ssp_libcosim(ssp_path, *, step_s: float | None, stop_s: float | None = N
         raise ValueError(f"step {step_s} s is not a whole number of nanoseconds")
     n = int(round((stop - start) / step_s))
     log_output_level(CosimLogLevel.WARNING)
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_cosim_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("cosim")) as tmp:
         with zipfile.ZipFile(ssp_path) as z:
             z.extractall(tmp)
         execution = CosimExecution.from_ssp_file(str(Path(tmp)), step_size=None if own_step else step_ns)

@@ -35,6 +35,7 @@ from ..recording.preprocess import DEFAULT_CUTOFF_HZ
 from ..recording import TIRES
 from ..model.scheme import Trajectory, _equilibrium_corner
 from .simulate_inputs import body_settings, diagnosis_of, read_body_document, tractor_fmu_paths
+from .._files import temp_prefix
 
 __all__ = ["run_tractor_fmus", "step_body_fmus", "TractorGain", "measure_tractor_gain", "build_tractor_fmus",
            "TractorSimulation", "simulate_tractor", "tractor_from_fmus", "UNEXPLAINED_RATIO", "CLEAT_PARAMETERS"]
@@ -162,7 +163,7 @@ def measure_tractor_gain(diag, fmu_dir=None, *, stem: str | None = None, strict:
     t0 = time.perf_counter()
     pb = diag.problem
     stem = stem or Path(pb.rec.source).stem or "tire"
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_tractor_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("tractor")) as tmp:
         base_paths = build_tractor_fmus(diag.baseline, tmp, "baseline")
         note = None
         try:

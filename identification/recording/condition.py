@@ -51,7 +51,7 @@ import numpy as np
 from .preprocess import DEFAULT_CUTOFF_HZ, lowpass, noise_rms
 from .record import FRONT_TIRES, Recording
 
-__all__ = ["condition", "conditioning_json", "NO_ACQUISITION", "ENGINE_BAND_HZ", "LINE_PROMINENCE",
+__all__ = ["condition", "conditioning_json", "ENGINE_BAND_HZ", "LINE_PROMINENCE",
            "SPEED_TOLERANCE"]
 
 #: Span around a channel's impact and its largest burst left out of the engine lines' fits, s (before, after).
@@ -75,11 +75,6 @@ MAX_ORDERS = 6
 SPEED_TOLERANCE = 0.035
 #: The left and right delays must agree to this fraction for the warning.
 SIDES_AGREE = 0.01
-#: The warning of a recording whose sidecar declares no acquisition chain.
-NO_ACQUISITION = ("the sidecar declares no acquisition chain (anti-alias filter, high-pass): the models take an "
-                  "ideal sensor, the mean acceleration over each sample; a filter they do not know leaves a "
-                  "residual at the impacts (about 5x the noise on point-contact tires) and can bias k and c: "
-                  "declare it under \"acquisition\" (docs/guide/recordings.md)")
 #: A burst rises where |x| first reaches this fraction of the channel's largest value.
 _RISE_FRACTION = 0.3
 #: A channel's own impact: its first excursion is where |x| first reaches this fraction of the burst maximum.
@@ -446,8 +441,6 @@ def condition(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce:
                             f"{np.mean(delays) * 1e3:.1f} ms) differ by {100 * (v_delay / rec.speed_m_s - 1):+.1f} % "
                             f"(the footprints shift the onsets by up to a few %; diagnose fits the delay and "
                             f"refits at its speed)")
-    if rec.acquisition is None:
-        warnings.append(NO_ACQUISITION)
     doc["warnings"] = warnings
     if announce:
         for w in warnings:

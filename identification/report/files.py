@@ -20,7 +20,7 @@ import math
 import tempfile
 from pathlib import Path
 
-from .._files import TEMP_SUFFIXES, atomic_write_texts, json_text, publish_files
+from .._files import TEMP_SUFFIXES, atomic_write_texts, json_text, publish_files, temp_prefix
 
 __all__ = ["POINT_CONTACT", "NOT_RECOMMENDED", "FOLDERS", "recommended_fmu", "point_contact_fmu",
            "recommended_params", "not_recommended_fmu", "not_recommended_params", "write_recommended_files",
@@ -103,7 +103,7 @@ def write_recommended_files(rec, stem: str, diagnosis: dict, out_dir) -> list[di
     params = out / recommended_params(stem)
     atomic_write_texts({params: json_text(_params_document(rec, stem, diagnosis)) + "\n"})
     entries, built = [], {}
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_point_contact_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("pointcontact")) as tmp:
         for tire in diagnosis["tires"]:
             staged = Path(tmp) / f"{stem}_{tire}.fmu"
             export_fmu(params, staged, tire=tire, backend="native")

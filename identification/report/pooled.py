@@ -21,7 +21,7 @@ import re
 import tempfile
 from pathlib import Path
 
-from .._files import atomic_write_texts, json_text, make_folders, publish_files
+from .._files import atomic_write_texts, json_text, make_folders, publish_files, temp_prefix
 
 __all__ = ["CAMPAIGN", "pooled_name", "write_pooled_files", "write_campaign"]
 
@@ -92,7 +92,7 @@ def write_pooled_files(conditions: list, out_dir) -> list:
         params[out / "params" / CAMPAIGN / f"{name}.json"] = json_text(_params_document(row)) + "\n"
     atomic_write_texts(params)
     built = {}
-    with tempfile.TemporaryDirectory(prefix="cleatfmu_campaign_") as tmp:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("campaign")) as tmp:
         for name, row in names.items():
             staged = Path(tmp) / f"{name}.fmu"
             export_fmu(out / "params" / CAMPAIGN / f"{name}.json", staged, tire=row["tire"], backend="native")
