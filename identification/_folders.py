@@ -190,6 +190,7 @@ class FolderSet:
         self._saved_tmp = None
         self._previous: Path | None = None       # where the previous set is after the swap (None: there was none)
         self._swapped = False
+        self._existed = False                     # the folder held a previous set when the run began
         self._settled = False                     # kept or undone (:meth:`_settle`)
         self._settle_lock = threading.Lock()
 
@@ -198,6 +199,7 @@ class FolderSet:
         if self.target.exists() and not self.target.is_dir():
             raise InputError(self.shown, "exists and is not a directory")
         make_folders(self.target.parent)
+        self._existed = self.target.is_dir()
         at_forced_exit(self, self._end_now)
         try:
             self._lock()
@@ -235,7 +237,8 @@ class FolderSet:
 
     def _raise_write_error(self, exc) -> None:
         if isinstance(exc, OSError) and exc.errno in WRITE_ERRNOS:
-            raise InputError(self.shown, f"cannot write: {exc.strerror} (the previous contents are kept)") from None
+            kept = " (the previous contents are kept)" if self._existed else ""
+            raise InputError(self.shown, f"cannot write: {exc.strerror}{kept}") from None
 
     # ------------------------------------------------------------------ the lock
     def _lock(self) -> None:

@@ -530,3 +530,29 @@ def test_names_xml_forbids_are_escaped_in_the_fmu_and_the_ssp(tmp_path):
         assert simulate_fmu(str(fmu), stop_time=0.05)["time"][-1] == pytest.approx(0.05)
     ssd = ET.fromstring(ssd_bytes("ride", "a ride on c\x01d\udcff.csv", start_s=0.0, stop_s=1.0, step_s=1e-3))
     assert ssd.find("{*}System").get("description") == "a ride on c\\x01d\\udcff.csv"
+
+
+def test_a_pipe_named_as_a_recording_is_called_what_it_is(tmp_path, capsys):
+    import os
+
+    fifo = tmp_path / "rec.csv"
+    os.mkfifo(fifo)
+    for command in (["identify", str(fifo)], ["diagnose", str(fifo)]):
+        assert cli.main(command) == 2
+        err = capsys.readouterr().err
+        assert err.strip() == f"cleatfmu: error: {fifo}: is not a regular file (a pipe or a device)", err
+
+
+def test_export_says_so_when_identify_warned_of_the_tire(tmp_path, capsys):
+    entry = {"k": 651.7e3, "c": 2500.0, "mass": 1716.2,
+             "warning": "its one-mode fit leaves a correlated residual (decay_misfit 14): see diagnose"}
+    (tmp_path / "p.json").write_text(json.dumps({"recording": "r.csv", "speed_kmh": 7.0,
+                                                 "tires": {"FR": entry, "FL": {**entry, "warning": None}}}))
+    assert cli.main(["export", str(tmp_path / "p.json"), "--tire", "FR", "-o", str(tmp_path / "fr.fmu"),
+                     "--platforms", "linux64"]) == 0
+    err = capsys.readouterr().err
+    assert err.strip() == (f"cleatfmu: warning: {tmp_path / 'p.json'}: tire FR: the identification warned: "
+                           f"{entry['warning']} (the exported k and c are its values)")
+    assert cli.main(["export", str(tmp_path / "p.json"), "--tire", "FL", "-o", str(tmp_path / "fl.fmu"),
+                     "--platforms", "linux64"]) == 0
+    assert capsys.readouterr().err == ""

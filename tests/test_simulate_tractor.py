@@ -153,7 +153,7 @@ def test_ssp_check_without_libcosimpy_checks_in_fmpy_and_says_so(cli, diagnosed,
     csv_path, body, fmus, doc = diagnosed
     res = cli("ssp", fmus, csv_path, "--body", body, "-o", tmp_path / "t.ssp", "--check", "--json")
     assert res.code == 0, res.err
-    assert res.err.strip() == ("cleatfmu: warning: --check: libcosimpy is not installed (pip install libcosimpy): "
+    assert res.err.strip() == ("cleatfmu: warning: --check: libcosimpy is not installed (pip install 'cleatfmu[libcosim]'): "
                                "the archive is checked in fmpy only")
     hosts = [h for h in json.loads(res.out)["check"] if not h.startswith("exchange")]
     assert hosts == ["fmpy (sequential exchange)", "fmpy (parallel exchange)"]

@@ -9,6 +9,7 @@ against numpy's weighted polyfit and its defining properties.
 from __future__ import annotations
 
 import json
+import os
 import math
 
 import numpy as np
@@ -270,3 +271,24 @@ def test_map_command_refuses_bad_input_in_one_line(batch, cli, tmp_path):
     (tmp_path / "summary.json").write_text(json.dumps(old))
     res = cli("map", tmp_path / "summary.json", "-o", tmp_path / "o")
     assert res.code == 2 and "older cleatfmu" in res.err
+
+
+def test_map_writes_its_folder_as_one_set_one_run_at_a_time(batch, cli, tmp_path):
+    """A second map into a folder another run is writing is refused naming that run; a map written over an
+    earlier one replaces its files and keeps the folder's other files.  Before: two maps at once both ended 0,
+    one of 12 with the JSON of one run beside the FMUs of the other."""
+    from identification._folders import FolderSet
+
+    report, _, _ = batch
+    out = tmp_path / "map"
+    with FolderSet(out):                       # another run holds the folder
+        res = cli("map", report, "-o", out, "--no-fmu")
+        assert res.code == 2 and f"another cleatfmu run (pid {os.getpid()})" in res.err, res.err
+        assert len(res.err.strip().splitlines()) == 1
+    assert list(out.iterdir()) == []           # the holder's (empty) set: the refused run wrote nothing
+    (out / "notes.txt").write_text("mine")
+    res = cli("map", report, "-o", out, "--no-fmu")
+    assert res.code == 0, res.err
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "tire_map.json"]
+    assert f"wrote {out / 'tire_map.json'}" in res.out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["map"]       # nothing beside it

@@ -54,6 +54,10 @@ def run(args) -> int:
     import sys
 
     _, tire, entry = read_identified(args.params, args.tire, accept_out_of_range=args.accept_out_of_range)
+    if isinstance(entry.get("warning"), str) and entry["warning"]:
+        # identify warned of this tire (its fit shows a coupled body or a misfit): the file carries those values
+        print(f"cleatfmu: warning: {args.params}: tire {tire}: the identification warned: {entry['warning']} "
+              f"(the exported k and c are its values)", file=sys.stderr)
     if args.format != "fmu" or args.base is not None:
         from ..fmu.tire_files import FORMATS, export_tire_file
 

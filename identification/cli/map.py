@@ -99,7 +99,7 @@ def run(args) -> int:
     from .._files import json_text
     from ..fmu.tire_map_fmu import export_map_fmu
     from ..report.tire_map import map_of_reports
-    from .util import announce_compilation, make_folders, write_files
+    from .util import announce_compilation, write_files
 
     tires, platforms = _check(args)
     out = Path(args.output)
@@ -111,14 +111,19 @@ def run(args) -> int:
         raise InputError("--tire", f"no map for {', '.join(missing)}: "
                                    + ("; ".join(f"{t}: {doc['skipped'][t]}" for t in missing if t in doc["skipped"])
                                       or "no runs with recommended k and c"))
-    make_folders(out)
-    written = write_files({out / MAP_JSON: (json_text(doc) + "\n").encode("utf-8")})
-    if not args.no_fmu:
-        announce_compilation()
-        for tire in doc["tires"]:
-            written.append(export_map_fmu(doc, tire, out / f"tire_map_{tire}.fmu",
-                                          unloaded_radius_m=args.unloaded_radius_m, fmi_version=args.fmi_version,
-                                          platforms=platforms))
+    from .._folders import FolderSet
+
+    # DIR as one set: the earlier map's files or the new ones (never a mix), its other files kept, one run at a
+    # time (a second is refused, naming the first one's pid)
+    with FolderSet(out, keep_existing=True) as new:
+        written = [out / p.relative_to(new) for p in
+                   write_files({new / MAP_JSON: (json_text(doc) + "\n").encode("utf-8")})]
+        if not args.no_fmu:
+            announce_compilation()
+            for tire in doc["tires"]:
+                path = export_map_fmu(doc, tire, new / f"tire_map_{tire}.fmu", unloaded_radius_m=args.unloaded_radius_m,
+                                      fmi_version=args.fmi_version, platforms=platforms)
+                written.append(out / Path(path).relative_to(new))
     for tire, reason in doc["skipped"].items():
         print(f"cleatfmu: warning: tire {tire} not mapped: {reason}", file=sys.stderr)
     if args.json:

@@ -76,7 +76,7 @@ def run(args) -> int:
             from ..fmu.ssp_run import check_ssp
             libcosim = libcosim_available()
             if not libcosim:
-                print("cleatfmu: warning: --check: libcosimpy is not installed (pip install libcosimpy): the "
+                print("cleatfmu: warning: --check: libcosimpy is not installed (pip install 'cleatfmu[libcosim]'): the "
                       "archive is checked in fmpy only", file=sys.stderr)
             check = check_ssp(staged, record, start_s=start, step_s=h, stop_s=stop, seat_x_m=seat_x,
                               seat_y=args.seat_y, libcosim=libcosim)

@@ -83,7 +83,8 @@ class TireFmu:
 
         path = Path(path)
         if not path.is_file():
-            raise InputError(path, "no such file")
+            raise InputError(path, "no such file" if not path.exists() else "is a directory, not a file"
+                             if path.is_dir() else "is not a regular file (a pipe or a device)")
         try:
             self.md = read_model_description(str(path))
         except Exception as exc:  # fmpy raises several types for a bad archive

@@ -209,6 +209,12 @@ def sidecar_path(csv_path: str | Path) -> Path:
 
 # ----------------------------------------------------------------------------- reading
 
+def _not_a_file(path: Path) -> str:
+    """Why `path` cannot be read as a file: missing, a folder, or a pipe or device."""
+    return "no such file" if not path.exists() else "is a directory, not a file" if path.is_dir() else \
+        "is not a regular file (a pipe or a device)"
+
+
 def read_recording(csv_path: str | Path) -> Recording:
     """Read and validate a ``cleat-recording/1`` recording.
 
@@ -230,7 +236,7 @@ def read_recording(csv_path: str | Path) -> Recording:
     if csv_path.suffix.lower() != ".csv":
         raise InputError(csv_path, "expected a recording .csv file")
     if not csv_path.is_file():
-        raise InputError(csv_path, "no such file")
+        raise InputError(csv_path, _not_a_file(csv_path))
     meta_path = sidecar_path(csv_path)
     if not meta_path.is_file():
         raise InputError(csv_path, f"sidecar {meta_path.name} not found (a recording is NAME.csv + NAME.json)")
