@@ -136,6 +136,5 @@ def test_ride_cli_on_class_e_reports_lost_contact_and_warns_in_one_line(cli):
     assert max(c["tension_share"].values()) > 0.02 and c["warning"]
     assert res.err.count("\n") == 1 and res.err.startswith("cleatfmu: warning: set final: tire ")
     assert max(c["longest_lost_contact_s"].values()) > 0 and max(c["lost_contact_episodes"].values()) >= 1
-    text = cli("ride", "--example", "7kmh", "--road", "E", "--speed-kmh", "15", "--compare", "final",
-               "--realisations", "2")
-    assert text.code == 0 and " times per road, at most " in text.out, text.out
+    from identification.cli.ride import format_contact
+    assert " times per road, at most " in format_contact(json.loads(res.out))

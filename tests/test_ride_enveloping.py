@@ -70,28 +70,47 @@ def test_rides_with_footprints_match_the_road_psd_through_the_footprint_response
     assert predicted < 0.9 * point                      # the footprints matter here: the check has teeth
 
 
-def test_ride_command_rolls_the_tires_on_the_diagnosed_footprints(cli, tmp_path):
+@pytest.fixture(scope="module")
+def diagnosis(tmp_path_factory):
+    """The embedded 7 km/h day's ``diagnose --json`` document, as a file (``ride --body`` takes it)."""
+    import contextlib
+    import io
+
+    from identification.cli import main
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["diagnose", "--example", "7kmh", "--json"]) == 0
+    path = tmp_path_factory.mktemp("diagnosis") / "diag.json"
+    path.write_text(out.getvalue())
+    return path
+
+
+def test_ride_command_rolls_the_tires_on_the_diagnosed_footprints(cli, tmp_path, diagnosis):
     res = cli("ride", "--example", "7kmh", "--compare", "paper,final", "--realisations", "2", "--json")
     assert res.code == 0, res.err
-    doc = json.loads(res.out)
-    diag = json.loads(cli("diagnose", "--example", "7kmh", "--json").out)
+    doc = json.loads(res.out)                  # (diagnosed here; below from the document, as --body reads it)
+    diag = json.loads(diagnosis.read_text())
     assert "enveloping" in diag["effects"]
     fitted = {t: diag["tires"][t]["parameters"]["footprint"]["value"] for t in TIRES}
     for entry in doc["sets"].values():
         assert entry["footprint_m"] == pytest.approx(fitted, rel=1e-9)
+    body = json.loads(cli("ride", "--example", "7kmh", "--compare", "paper,final", "--realisations", "2",
+                          "--json", "--body", diagnosis).out)
+    assert body["sets"]["final"]["footprint_m"] == pytest.approx(fitted, rel=1e-9)
     off = json.loads(cli("ride", "--example", "7kmh", "--compare", "paper,final", "--realisations", "2",
-                         "--json", "--enveloping", "off").out)
+                         "--json", "--enveloping", "off", "--body", diagnosis).out)
     assert all("footprint_m" not in e for e in off["sets"].values())
     assert doc["sets"]["final"]["expected"]["a_w"]["mean"] < 0.9 * off["sets"]["final"]["expected"]["a_w"]["mean"]
-    text = cli("ride", "--example", "7kmh", "--compare", "final", "--realisations", "1")
+    text = cli("ride", "--example", "7kmh", "--compare", "final", "--realisations", "1", "--body", diagnosis)
     assert "roll with the footprints the diagnosis fitted (front 0.30 m, rear 0.38 m; enveloping)" in text.out
     refused = cli("ride", "--example", "7kmh", "--compare", "final", "--realisations", "1", "--ssp",
-                  str(tmp_path / "ssp"))
+                  str(tmp_path / "ssp"), "--body", diagnosis)
     assert refused.code == 2 and refused.err.count("\n") == 1 and "--enveloping off" in refused.err
     assert not (tmp_path / "ssp").exists()
 
 
-def test_the_seats_band_spectra_add_up_to_its_weighted_rms_and_average_over_the_roads(cli, tmp_path):
+def test_the_seats_band_spectra_add_up_to_its_weighted_rms_and_average_over_the_roads(cli, tmp_path, diagnosis):
     """A ride's one-third-octave bands of the seat's weighted x, y, z hold their a_w (Parseval: the bands tile
     the weighting's range) within 4 %; the expected spectrum over the roads is the root mean square of the rides'
     bands; the command prints and plots it."""
@@ -112,11 +131,12 @@ def test_the_seats_band_spectra_add_up_to_its_weighted_rms_and_average_over_the_
     with pytest.raises(ValueError):
         expected_bands([runs[0].bands["z"], ThirdOctave(np.array([1.0]), ["1"], np.array([1.0]))])
     res = cli("ride", "--example", "7kmh", "--compare", "paper,final", "--realisations", "2", "--bands",
-              "--bands-plot", str(tmp_path / "bands.png"))
+              "--bands-plot", str(tmp_path / "bands.png"), "--body", diagnosis)
     assert res.code == 0, res.err
     assert "seat's one-third-octave bands, expected over 2 road(s)" in res.out and "  z (Wk)  Hz " in res.out
     assert (tmp_path / "bands.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    doc = json.loads(cli("ride", "--example", "7kmh", "--compare", "final", "--realisations", "2", "--json").out)
+    doc = json.loads(cli("ride", "--example", "7kmh", "--compare", "final", "--realisations", "2", "--json",
+                         "--body", diagnosis).out)
     z = doc["sets"]["final"]["expected"]["third_octave"]["z"]
     assert z["nominal_hz"][0] == "0.5" and z["nominal_hz"][-1] == "80"
     assert math.sqrt(sum(v ** 2 for v in z["rms_m_s2"])) == pytest.approx(
