@@ -556,3 +556,36 @@ def test_export_says_so_when_identify_warned_of_the_tire(tmp_path, capsys):
     assert cli.main(["export", str(tmp_path / "p.json"), "--tire", "FL", "-o", str(tmp_path / "fl.fmu"),
                      "--platforms", "linux64"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_a_missing_optional_package_is_one_line_naming_its_extra(tmp_path, capsys, monkeypatch):
+    """report --scheduler without dask.distributed: exit 2, one line naming the extra, nothing written."""
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_distributed(name, *args, **kwargs):
+        if name == "distributed" or name.startswith("distributed."):
+            raise ImportError(f"No module named {name!r}")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_distributed)
+    monkeypatch.delitem(sys.modules, "distributed", raising=False)
+    from identification.recording.examples import example_path
+
+    assert cli.main(["report", str(example_path("7kmh")), "-o", str(tmp_path / "out"), "--scheduler",
+                     "tcp://127.0.0.1:1"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == ("cleatfmu: error: --scheduler: needs the 'distributed' package "
+                           "(pip install 'cleatfmu[cluster]')"), err
+    assert not (tmp_path / "out").exists()
+
+
+def test_comfort_refuses_accelerations_no_vibration_record_holds(tmp_path, capsys):
+    """1e300 m/s^2 gave exit 0, numpy overflow warnings and a crest factor of 0."""
+    rows = "\n".join(f"{i / 1000:.3f},{1e300 if i % 7 else -1e300}" for i in range(3000))
+    (tmp_path / "big.csv").write_text("time_s,z\n" + rows + "\n")
+    assert cli.main(["comfort", str(tmp_path / "big.csv"), "--json"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().startswith(f"cleatfmu: error: {tmp_path / 'big.csv'}") and "1e+300 m/s^2" in err, err
+    assert "Warning" not in err and len(err.strip().splitlines()) == 1

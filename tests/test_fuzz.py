@@ -713,9 +713,16 @@ def _export_ok(where, argv, folder, new, stdout) -> None:
 
 
 def _check_fmu(where, path: Path) -> None:
+    """The FMU holds a modelDescription.xml that parses (a name with a character XML forbids once broke it)."""
+    import xml.etree.ElementTree as ET
+
     with zipfile.ZipFile(path) as z:
         if "modelDescription.xml" not in z.namelist():
             raise FuzzFailure(f"{where}: the FMU {path.name} has no modelDescription.xml")
+        try:
+            ET.fromstring(z.read("modelDescription.xml"))
+        except ET.ParseError as exc:
+            raise FuzzFailure(f"{where}: the FMU {path.name}'s modelDescription.xml does not parse: {exc}") from None
 
 
 def _option(argv, name: str):

@@ -35,6 +35,10 @@ EU_A8_LIMIT_M_S2 = 1.15
 #: The same for the daily vibration dose value, m/s^1.75.
 EU_VDV_ACTION = 9.1
 EU_VDV_LIMIT = 21.0
+#: The largest acceleration a record may hold, m/s² (1e5 g: beyond any vibration a seat or floor sees; far
+#: beyond it the ratings' fourth powers overflow).
+MAX_ACCELERATION_M_S2 = 1e6
+
 #: ISO 2631-1 clauses 6.2.1 and 6.3.3: above a crest factor of 9, or MTVV / a_w above 1.5, or
 #: VDV / (a_w T^¼) above 1.75, the basic (weighted RMS) method may underestimate the effect of shocks.
 CREST_FACTOR_LIMIT = 9.0
@@ -395,6 +399,10 @@ def comfort(acc_m_s2, sample_rate_hz: float, weighting: str | Weighting = "Wk", 
     if acc.size < round(_positive("tau_s", tau_s) * fs):
         raise InputError("acc_m_s2", f"record of {acc.size / fs:g} s is shorter than the running-RMS "
                                      f"integration time {tau_s:g} s")
+    peak = float(np.max(np.abs(acc))) if acc.size else 0.0
+    if peak > MAX_ACCELERATION_M_S2:        # its fourth power (VDV) would overflow: no vibration record in m/s²
+        raise InputError("acc_m_s2", f"accelerations up to {peak:.3g} m/s^2 (more than "
+                                     f"{MAX_ACCELERATION_M_S2:g} m/s^2): not a vibration record in m/s^2")
     aw = weight(acc, fs, w)
     duration = acc.size / fs
     a_w = float(np.sqrt(np.mean(aw * aw)))
