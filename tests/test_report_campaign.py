@@ -268,3 +268,18 @@ def test_the_pooled_answer_is_written_as_a_tire_fmu_that_carries_it(cli, campaig
         result = simulate_fmu(str(fmu), stop_time=0.5, output=["force_z"])
         assert result["force_z"][-1] == pytest.approx(row["wheel_load_N"], rel=1e-3)
         assert f'href="{row["files"]["fmu"]}"' in (out / "report.html").read_text()
+
+
+def test_one_interval_reads_the_same_in_the_campaign_row_and_the_recordings_row():
+    """Before: 549.67–550.28 in the campaign row, 549.67–550.27 in the per-recording row (nearest rounding);
+    both now round to the digits the interval supports, the bounds outwards."""
+    from identification.report.tables import _shown, _value_interval_cells
+
+    value, ci = 550_000.0, (549_670.4, 550_275.3)
+    r = rounded_interval(value, *ci)
+    assert _value_interval_cells(value, ci, ".2f") == [
+        f'<td><b>{_shown(r["value"], r["step"], 1e-3)}</b></td>',
+        f'<td>{_shown(r["ci"][0], r["step"], 1e-3)}–{_shown(r["ci"][1], r["step"], 1e-3)}</td>']
+    assert _value_interval_cells(value, ci, ".2f")[1] == "<td>549.67–550.28</td>"
+    assert _value_interval_cells(4188.0, (4178.8, 4195.3), ".3f")[1] == "<td>4.1788–4.1953</td>"
+    assert _value_interval_cells(4188.0, (0.0, math.inf), ".3f")[1] == "<td>0.000–inf</td>"    # unbounded

@@ -125,10 +125,8 @@ def verdict_table(result, truths: dict) -> Table:
         link = f'<a href="{_e(fmu)}">{_e(fmu.rsplit("/", 1)[-1])}</a>' if fmu else "–"
         cells = [f'<td class="l"><a href="#diagnosis-{_e(r.stem)}">{_e(r.stem)}</a></td>',
                  f'<td>{r.speed_kmh:.3g}</td>', f'<td class="l"><a href="#tire-{_e(r.stem)}-{t.tire}">{t.tire}</a></td>',
-                 f'<td><b>{rec["k"] / 1e3:.2f}</b></td>',
-                 f'<td>{rec["k_ci"][0] / 1e3:.2f}–{rec["k_ci"][1] / 1e3:.2f}</td>',
-                 f'<td><b>{rec["c"] / 1e3:.3f}</b></td>',
-                 f'<td>{rec["c_ci"][0] / 1e3:.3f}–{rec["c_ci"][1] / 1e3:.3f}</td>']
+                 *_value_interval_cells(rec["k"], rec["k_ci"], ".2f"),
+                 *_value_interval_cells(rec["c"], rec["c_ci"], ".3f")]
         if with_truth:
             cells += [_td(truth["k"] if truth else None, ".2f", 1e-3, "truth"),
                       _td(truth["c"] if truth else None, ".3f", 1e-3, "truth")]
@@ -144,6 +142,20 @@ def verdict_heads(table: Table) -> list:
     if "k_truth_N_m" in table.columns:
         heads += ['K rig truth', 'C rig truth']
     return heads + ['NRMSE', 'noise NRMSE', 'verdict', 'recommended FMU']
+
+
+def _value_interval_cells(value: float, ci, fallback: str) -> list:
+    """A value (N/m or N s/m) and its interval as two cells in k-units: rounded as the campaign rows round
+    (:func:`~identification.report.campaign.rounded_interval`: the digits the interval supports, the bounds
+    outwards), so one interval reads the same wherever it is shown; `fallback` format where it is unbounded."""
+    from .campaign import rounded_interval
+
+    lo, hi = ci
+    if all(math.isfinite(v) for v in (value, lo, hi)) and lo <= value <= hi and hi > lo:
+        r = rounded_interval(value, lo, hi)
+        return [f'<td><b>{_shown(r["value"], r["step"], 1e-3)}</b></td>',
+                f'<td>{_shown(r["ci"][0], r["step"], 1e-3)}–{_shown(r["ci"][1], r["step"], 1e-3)}</td>']
+    return [f'<td><b>{value / 1e3:{fallback}}</b></td>', f'<td>{lo / 1e3:{fallback}}–{hi / 1e3:{fallback}}</td>']
 
 
 def _shown(x: float, step: float, scale: float) -> str:
