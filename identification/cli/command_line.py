@@ -219,15 +219,15 @@ def _raise_terminated(signum, frame):
 
 
 def _raise_interrupt(signum, frame):
-    """Ctrl-C: raise KeyboardInterrupt where the command is (or soon, :func:`_raise_now_or_soon`: in an import
-    lock's callback it would be dropped and the run go on); once it has ended (:data:`_ended`), only
-    remember it."""
+    """Ctrl-C: raise KeyboardInterrupt where the command is; once it has ended (:data:`_ended`), only remember
+    it.  (Not retried like SIGTERM: a KeyboardInterrupt that code drops, an import lock's callback, is caught
+    when the command's function returns, :func:`_run`.)"""
     global _signalled
     if _ended:
         _signalled = _signalled or 130
         return
     _signalled = 130
-    _raise_now_or_soon(130, frame)
+    raise KeyboardInterrupt
 
 
 #: Whether the command has ended (its outcome decided, its clean-up done): a signal from here on raises
