@@ -144,3 +144,38 @@ def test_ctrl_c_that_code_drops_still_ends_the_run_as_interrupted_with_its_outpu
     res = subprocess.run([sys.executable, "-c", _SWALLOWED, str(out)], capture_output=True, text=True, timeout=60)
     assert res.returncode == 130 and res.stderr.strip() == "cleatfmu: interrupted", (res.returncode, res.stderr)
     assert out.read_bytes() == b"old"
+
+
+_FORKING = textwrap.dedent("""
+    import os, signal, sys, types
+    seen = []
+    # registered before the command line's own hooks, as the logging module's are: runs inside theirs
+    os.register_at_fork(before=lambda: seen.append(signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])))
+    sys.argv[0] = "-m"
+    from identification.cli import command_line as cl
+
+    def command(argv):
+        pid = os.fork()
+        if pid == 0:
+            os._exit(0 if not signal.pthread_sigmask(signal.SIG_BLOCK, []) & {signal.SIGINT, signal.SIGTERM} else 3)
+        child = os.waitpid(pid, 0)[1]
+        after = signal.pthread_sigmask(signal.SIG_BLOCK, []) & {signal.SIGINT, signal.SIGTERM}
+        print(seen, os.waitstatus_to_exitcode(child), sorted(after), flush=True)
+        return 0
+
+    class _Parser:
+        def parse_known_args(self, argv):
+            return types.SimpleNamespace(func=command, trailing=None), []
+
+    cl.build_parser = lambda name=None: _Parser()
+    sys.exit(cl.main([]))
+""")
+
+
+def test_signals_are_held_while_the_process_forks():
+    """Ctrl-C as a report started its workers landed in the logging module's fork hook, printed "Exception
+    ignored" with a traceback: while forking, SIGINT and SIGTERM are blocked (inside the earlier-registered
+    hooks), and unblocked again in parent and child."""
+    res = subprocess.run([sys.executable, "-c", _FORKING], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "[True] 0 []", res.stdout

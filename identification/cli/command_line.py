@@ -351,6 +351,33 @@ def main(argv=None) -> int:
     return status
 
 
+_FORK_GUARD = False
+
+
+def _hold_signals_while_forking() -> None:
+    """Block SIGINT and SIGTERM in a thread that forks until the fork is done, in parent and child (once per
+    process).  The fork hooks of the standard library (the logging module's locks) run inside the fork: an
+    exception a signal raised there is printed as "Exception ignored" and dropped (seen: Ctrl-C as a report
+    started its worker processes).  Held, the signal comes just after the fork, where the command is."""
+    global _FORK_GUARD
+    if _FORK_GUARD or not hasattr(os, "register_at_fork") or not hasattr(signal, "pthread_sigmask"):
+        return
+    _FORK_GUARD = True
+    held = {signal.SIGINT, signal.SIGTERM}
+    saved: list = []
+
+    def before():
+        saved.append(signal.pthread_sigmask(signal.SIG_BLOCK, held))
+
+    def after():
+        if saved:
+            signal.pthread_sigmask(signal.SIG_SETMASK, saved.pop())
+
+    # hooks run before a fork in the reverse order of registration, after it in the order: registered after
+    # the logging module's, these block first and unblock last
+    os.register_at_fork(before=before, after_in_parent=after, after_in_child=after)
+
+
 def _escape_unprintable_output() -> None:
     """Write what the output's encoding cannot hold (a lone surrogate of a file name not in UTF-8) as an escape
     instead of failing with UnicodeEncodeError after the work is done."""
@@ -395,6 +422,7 @@ def _main(argv=None) -> int:
     global _signalled, _ended
     _signalled, _ended = 0, False
     _escape_unprintable_output()
+    _hold_signals_while_forking()
     previous = None
     try:
         previous = _previous_sigterm()
