@@ -179,3 +179,32 @@ def test_signals_are_held_while_the_process_forks():
     res = subprocess.run([sys.executable, "-c", _FORKING], capture_output=True, text=True, timeout=60)
     assert res.returncode == 0, res.stderr
     assert res.stdout.strip() == "[True] 0 []", res.stdout
+
+
+_IN_HOOK = textwrap.dedent("""
+    import signal, sys, types
+    sys.argv[0] = "-m"
+    from identification.cli import command_line as cl
+
+    cl._hold_signals_while_forking()
+    hook = types.SimpleNamespace(f_code=next(iter(cl._FORK_HOOKS)))
+    cl._signalled, cl._ended = 0, False
+    cl._raise_interrupt(signal.SIGINT, hook)          # as the fork hook restores the mask: not raised there
+    print("not raised in the hook", flush=True)
+
+    def later():
+        return 1
+    try:
+        later()
+        print("lost")
+    except KeyboardInterrupt:
+        print("raised at the next call", flush=True)
+""")
+
+
+def test_ctrl_c_let_through_inside_the_fork_hook_is_raised_at_the_next_call_outside_it():
+    """The third fresh-clone CI saw SIGTERM's retry raise inside the fork hook as it restored the mask
+    ("Exception ignored in ... after"): the hooks count as fragile code; Ctrl-C there waits for the next call."""
+    res = subprocess.run([sys.executable, "-c", _IN_HOOK], capture_output=True, text=True, timeout=60)
+    assert res.stdout.splitlines() == ["not raised in the hook", "raised at the next call"], (res.stdout, res.stderr)
+    assert "Traceback" not in res.stderr

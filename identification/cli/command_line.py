@@ -176,6 +176,8 @@ _FRAGILE = ("logging" + os.sep + "__init__.py", "<frozen importlib", "<frozen ab
 
 def _in_the_standard_library(frame) -> bool:
     """Whether `frame` runs code in which a signal's exception must not be raised (:data:`_FRAGILE`)."""
+    if frame is not None and frame.f_code in _FORK_HOOKS:
+        return True
     name = frame.f_code.co_filename if frame is not None else ""
     return any(part in name for part in _FRAGILE)
 
@@ -219,15 +221,32 @@ def _raise_terminated(signum, frame):
 
 
 def _raise_interrupt(signum, frame):
-    """Ctrl-C: raise KeyboardInterrupt where the command is; once it has ended (:data:`_ended`), only remember
-    it.  (Not retried like SIGTERM: a KeyboardInterrupt that code drops, an import lock's callback, is caught
-    when the command's function returns, :func:`_run`.)"""
+    """Ctrl-C: raise KeyboardInterrupt where the command is, or, in fragile standard-library code (an import
+    lock's callback drops it), at the next call outside it (:func:`_raise_at_the_next_safe_call`); once the
+    command has ended (:data:`_ended`), only remember it."""
     global _signalled
     if _ended:
         _signalled = _signalled or 130
         return
     _signalled = 130
+    if _in_the_standard_library(frame):
+        _raise_at_the_next_safe_call()
+        return
     raise KeyboardInterrupt
+
+
+def _raise_at_the_next_safe_call() -> None:
+    """Raise KeyboardInterrupt at the next call or return outside fragile code (:data:`_FRAGILE`), through
+    a profile hook of the main thread that removes itself: no timer, no further signal."""
+    own = (_raise_interrupt.__code__, _raise_at_the_next_safe_call.__code__)
+
+    def hook(frame, event, arg):
+        if event in ("call", "return") and frame.f_code not in own and frame.f_code is not hook.__code__ \
+                and not _in_the_standard_library(frame):
+            sys.setprofile(None)
+            if not _ended:
+                raise KeyboardInterrupt
+    sys.setprofile(hook)
 
 
 #: Whether the command has ended (its outcome decided, its clean-up done): a signal from here on raises
@@ -256,6 +275,9 @@ def _restore_signals(previous) -> None:
     end with its status)."""
     global _ended, _grace_timer
     _ended = True
+    if sys.getprofile() is not None and getattr(sys.getprofile(), "__qualname__", "").startswith(
+            "_raise_at_the_next_safe_call"):
+        sys.setprofile(None)
     if _grace_timer is not None:
         _grace_timer.cancel()
         _grace_timer = None
@@ -352,18 +374,21 @@ def main(argv=None) -> int:
 
 
 _FORK_GUARD = False
+#: The code of the fork hooks: a signal whose handler runs in them (as the mask is restored) is deferred.
+_FORK_HOOKS: set = set()
 
 
 def _hold_signals_while_forking() -> None:
-    """Block SIGINT and SIGTERM in a thread that forks until the fork is done, in parent and child (once per
-    process).  The fork hooks of the standard library (the logging module's locks) run inside the fork: an
+    """Block SIGINT, SIGTERM (and SIGTERM's retry, SIGALRM) in a thread that forks until the fork is done, in
+    parent and child (once per process); a signal the restored mask lets through inside the hook is deferred
+    there like one in fragile code.  The fork hooks of the standard library (the logging module's locks) run inside the fork: an
     exception a signal raised there is printed as "Exception ignored" and dropped (seen: Ctrl-C as a report
     started its worker processes).  Held, the signal comes just after the fork, where the command is."""
     global _FORK_GUARD
     if _FORK_GUARD or not hasattr(os, "register_at_fork") or not hasattr(signal, "pthread_sigmask"):
         return
     _FORK_GUARD = True
-    held = {signal.SIGINT, signal.SIGTERM}
+    held = {signal.SIGINT, signal.SIGTERM, signal.SIGALRM}      # (SIGALRM: SIGTERM's retry)
     saved: list = []
 
     def before():
@@ -376,6 +401,7 @@ def _hold_signals_while_forking() -> None:
     # hooks run before a fork in the reverse order of registration, after it in the order: registered after
     # the logging module's, these block first and unblock last
     os.register_at_fork(before=before, after_in_parent=after, after_in_child=after)
+    _FORK_HOOKS.update((before.__code__, after.__code__))      # a signal let through there waits (fragile)
 
 
 def _escape_unprintable_output() -> None:
