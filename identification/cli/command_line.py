@@ -176,7 +176,7 @@ _FRAGILE = ("logging" + os.sep + "__init__.py", "<frozen importlib", "<frozen ab
 
 def _in_the_standard_library(frame) -> bool:
     """Whether `frame` runs code in which a signal's exception must not be raised (:data:`_FRAGILE`)."""
-    if frame is not None and frame.f_code in _FORK_HOOKS:
+    if _forking or (frame is not None and frame.f_code in _FORK_HOOKS):
         return True
     name = frame.f_code.co_filename if frame is not None else ""
     return any(part in name for part in _FRAGILE)
@@ -374,6 +374,8 @@ def main(argv=None) -> int:
 
 
 _FORK_GUARD = False
+#: Whether this process is inside a fork (between its hooks): a signal's exception waits as in fragile code.
+_forking = False
 #: The code of the fork hooks: a signal whose handler runs in them (as the mask is restored) is deferred.
 _FORK_HOOKS: set = set()
 
@@ -392,11 +394,17 @@ def _hold_signals_while_forking() -> None:
     saved: list = []
 
     def before():
+        global _forking
+        _forking = True
         saved.append(signal.pthread_sigmask(signal.SIG_BLOCK, held))
 
     def after():
-        if saved:
-            signal.pthread_sigmask(signal.SIG_SETMASK, saved.pop())
+        global _forking
+        try:
+            if saved:       # (a signal held meanwhile runs its handler in here, which defers it: _forking)
+                signal.pthread_sigmask(signal.SIG_SETMASK, saved.pop())
+        finally:
+            _forking = False
 
     # hooks run before a fork in the reverse order of registration, after it in the order: registered after
     # the logging module's, these block first and unblock last
