@@ -32,6 +32,23 @@ def _defer_interrupt(signum, frame):
     _interrupted = _interrupted or signum
 
 
+def _choose_the_temporary_folder() -> None:
+    """Set :mod:`tempfile`'s folder as :func:`tempfile.gettempdir` would choose it ($TMPDIR, $TEMP, $TMP,
+    then the system's), without the probe file it writes and deletes in each candidate: a run killed
+    (SIGKILL) between the two left that 8-character file in $TMPDIR."""
+    import os
+    import tempfile
+
+    if tempfile.tempdir is not None:
+        return
+    candidates = [os.environ.get(name) for name in ("TMPDIR", "TEMP", "TMP")]
+    candidates += ["/tmp", "/var/tmp", "/usr/tmp"] if os.name == "posix" else []
+    for folder in filter(None, candidates):
+        if os.path.isdir(folder) and os.access(folder, os.W_OK | os.X_OK):
+            tempfile.tempdir = os.path.abspath(folder)
+            return
+
+
 _interrupted = 0
 #: Whether this process runs the command line as its program (told at the package's import, while
 #: ``python -m`` still shows as ``-m`` in ``sys.argv``).
@@ -40,6 +57,7 @@ if _AS_PROGRAM:
     for _signum in (_signal.SIGINT, _signal.SIGTERM):
         if _signal.getsignal(_signum) in (_signal.default_int_handler, _signal.SIG_DFL):
             _signal.signal(_signum, _defer_interrupt)
+    _choose_the_temporary_folder()
 
 
 __version__ = "0.1.0"

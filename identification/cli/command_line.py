@@ -175,11 +175,16 @@ _FRAGILE = ("logging" + os.sep + "__init__.py", "<frozen importlib", "<frozen ab
 
 
 def _in_the_standard_library(frame) -> bool:
-    """Whether `frame` runs code in which a signal's exception must not be raised (:data:`_FRAGILE`)."""
-    if _forking or (frame is not None and frame.f_code in _FORK_HOOKS):
+    """Whether `frame`, or a frame that called it, runs code in which a signal's exception must not be
+    raised (:data:`_FRAGILE`, the fork hooks): a plain function called from the logging module's fork hook
+    (a weak set's iterator) is as fragile as the hook."""
+    if _forking:
         return True
-    name = frame.f_code.co_filename if frame is not None else ""
-    return any(part in name for part in _FRAGILE)
+    while frame is not None:
+        if frame.f_code in _FORK_HOOKS or any(part in frame.f_code.co_filename for part in _FRAGILE):
+            return True
+        frame = frame.f_back
+    return False
 
 
 def _raise_now_or_soon(code: int, frame) -> None:
@@ -239,8 +244,12 @@ def _raise_at_the_next_safe_call() -> None:
     """Raise KeyboardInterrupt at the next call or return outside fragile code (:data:`_FRAGILE`), through
     a profile hook of the main thread that removes itself: no timer, no further signal."""
     own = (_raise_interrupt.__code__, _raise_at_the_next_safe_call.__code__)
+    pid = os.getpid()
 
     def hook(frame, event, arg):
+        if os.getpid() != pid:      # a child forked meanwhile inherits the hook: the Ctrl-C is not its own
+            sys.setprofile(None)
+            return
         if event in ("call", "return") and frame.f_code not in own and frame.f_code is not hook.__code__ \
                 and not _in_the_standard_library(frame):
             sys.setprofile(None)
@@ -407,7 +416,8 @@ def _hold_signals_while_forking() -> None:
             _forking = False
 
     # hooks run before a fork in the reverse order of registration, after it in the order: registered after
-    # the logging module's, these block first and unblock last
+    # the logging module's (imported here first), these block first and unblock last
+    import logging  # noqa: F401
     os.register_at_fork(before=before, after_in_parent=after, after_in_child=after)
     _FORK_HOOKS.update((before.__code__, after.__code__))      # a signal let through there waits (fragile)
 
