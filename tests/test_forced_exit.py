@@ -223,7 +223,13 @@ _FORKED_MEANWHILE = textwrap.dedent("""
     # a plain function called from the logging module's fork hook counts as fragile: the Ctrl-C waits
     inside = types.SimpleNamespace(f_code=plain.__code__, f_back=types.SimpleNamespace(
         f_code=logging._after_at_fork_child_reinit_locks.__code__, f_back=None))
-    print("fragile beneath", cl._in_the_standard_library(inside), flush=True)
+    class Held:
+        def __del__(self):
+            return 1
+    finalizer = types.SimpleNamespace(f_code=plain.__code__, f_back=types.SimpleNamespace(
+        f_code=Held.__del__.__code__, f_back=None))
+    print("fragile beneath", cl._in_the_standard_library(inside), cl._in_the_standard_library(finalizer),
+          cl._in_the_standard_library(types.SimpleNamespace(f_code=plain.__code__, f_back=None)), flush=True)
     cl._raise_interrupt(signal.SIGINT, inside)
     pid = os.fork()                         # the child inherits the waiting hook: the Ctrl-C is not its own
     if pid == 0:
@@ -249,7 +255,7 @@ def test_a_waiting_ctrl_c_is_the_parents_only_and_waits_beneath_fragile_callers(
     child fork hook (in a weak set's iterator it called): the child drops the waiting hook, and a frame
     called from fragile code is fragile."""
     res = subprocess.run([sys.executable, "-c", _FORKED_MEANWHILE], capture_output=True, text=True, timeout=60)
-    assert res.stdout.splitlines() == ["fragile beneath True", "child: not raised", "child exit 0",
+    assert res.stdout.splitlines() == ["fragile beneath True True False", "child: not raised", "child exit 0",
                                        "parent: raised at the next call"], (res.stdout, res.stderr)
     assert "Traceback" not in res.stderr and "Exception ignored" not in res.stderr, res.stderr
 

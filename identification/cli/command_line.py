@@ -170,8 +170,12 @@ def _force_exit() -> None:
 
 #: Standard-library code where an exception raised by a signal handler is ignored ("Exception ignored in")
 #: or leaves a lock held: the logging module's locks (taken around every fork), the import machinery, the
-#: abstract base classes' subclass checks (called from C, which drops the exception).
-_FRAGILE = ("logging" + os.sep + "__init__.py", "<frozen importlib", "<frozen abc>")
+#: abstract base classes' subclass checks (called from C, which drops the exception), the weak references'
+#: callbacks (called by the garbage collector, which drops it too).
+_FRAGILE = ("logging" + os.sep + "__init__.py", "<frozen importlib", "<frozen abc>", os.sep + "_weakrefset.py",
+            os.sep + "weakref.py")
+#: Functions whose exceptions the interpreter drops wherever they are defined: finalizers.
+_FRAGILE_FUNCTIONS = ("__del__",)
 
 
 def _in_the_standard_library(frame) -> bool:
@@ -181,7 +185,9 @@ def _in_the_standard_library(frame) -> bool:
     if _forking:
         return True
     while frame is not None:
-        if frame.f_code in _FORK_HOOKS or any(part in frame.f_code.co_filename for part in _FRAGILE):
+        code = frame.f_code
+        if code in _FORK_HOOKS or code.co_name in _FRAGILE_FUNCTIONS or any(part in code.co_filename
+                                                                           for part in _FRAGILE):
             return True
         frame = frame.f_back
     return False
