@@ -17,12 +17,12 @@ pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PO
 _CHILD = textwrap.dedent("""
     import sys, time
     from pathlib import Path
-    from identification.cli import command_line as cl
+    from identification.cli import command_line as cl, signals as sg
     from identification._files import OutputFolders, atomic_write_bytes, temp_beside
     from identification._folders import FolderSet
 
     root = Path(sys.argv[1])
-    cl.TERMINATE_GRACE_S = 0.5
+    sg.TERMINATE_GRACE_S = 0.5
 
     def stubborn(argv):
         with OutputFolders():
@@ -67,29 +67,29 @@ def test_a_run_that_swallows_sigterm_is_ended_with_its_output_undone(tmp_path):
 _EDGES = textwrap.dedent("""
     import os, signal, sys
     sys.argv[0] = "-m"              # as ``python -m identification.cli``: the program's own signal handling
-    from identification.cli import command_line as cl
+    from identification.cli import command_line as cl, signals as sg
 
     where = sys.argv[1]
     if where == "installing":       # SIGTERM pending while the command's handler is being installed
         real = signal.signal
         def install(signum, handler):
             previous = real(signum, handler)
-            if signum == signal.SIGTERM and handler is cl._raise_terminated:
+            if signum == signal.SIGTERM and handler is sg._raise_terminated:
                 os.kill(os.getpid(), signal.SIGTERM)
             return previous
         signal.signal = install
         cl._run = lambda argv: 0
     else:                           # SIGTERM and Ctrl-C while the handlers are restored after the command
-        real_restore = cl._restore_signals
+        real_restore = sg._restore_signals
         def restore(previous):
             os.kill(os.getpid(), signal.SIGINT)
             os.kill(os.getpid(), signal.SIGALRM if where == "retry" else signal.SIGTERM)
             real_restore(previous)
-        cl._restore_signals = restore
+        sg._restore_signals = restore
         def command(argv):
             if where == "retry":    # a retry of SIGTERM armed in fragile code, pending at the end
-                cl._signalled = cl.EXIT_TERMINATED
-                signal.signal(signal.SIGALRM, cl._raise_terminated)
+                sg._signalled = cl.EXIT_TERMINATED
+                signal.signal(signal.SIGALRM, sg._raise_terminated)
             return 0
         cl._run = command
     sys.exit(cl.main([]))
@@ -112,7 +112,7 @@ _SWALLOWED = textwrap.dedent("""
     import signal, sys, time, types
     from pathlib import Path
     sys.argv[0] = "-m"              # as ``python -m identification.cli``: the program's own signal handling
-    from identification.cli import command_line as cl
+    from identification.cli import command_line as cl, signals as sg
     from identification._files import atomic_write_bytes
 
     importing = types.SimpleNamespace(f_code=types.SimpleNamespace(co_filename="<frozen importlib._bootstrap>"))
@@ -152,7 +152,7 @@ _FORKING = textwrap.dedent("""
     # registered before the command line's own hooks, as the logging module's are: runs inside theirs
     os.register_at_fork(before=lambda: seen.append(signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])))
     sys.argv[0] = "-m"
-    from identification.cli import command_line as cl
+    from identification.cli import command_line as cl, signals as sg
 
     def command(argv):
         pid = os.fork()
@@ -184,12 +184,12 @@ def test_signals_are_held_while_the_process_forks():
 _IN_HOOK = textwrap.dedent("""
     import signal, sys, types
     sys.argv[0] = "-m"
-    from identification.cli import command_line as cl
+    from identification.cli import command_line as cl, signals as sg
 
-    cl._hold_signals_while_forking()
-    hook = types.SimpleNamespace(f_code=next(iter(cl._FORK_HOOKS)), f_back=None)
-    cl._signalled, cl._ended = 0, False
-    cl._raise_interrupt(signal.SIGINT, hook)          # as the fork hook restores the mask: not raised there
+    sg._hold_signals_while_forking()
+    hook = types.SimpleNamespace(f_code=next(iter(sg._FORK_HOOKS)), f_back=None)
+    sg._signalled, sg._ended = 0, False
+    sg._raise_interrupt(signal.SIGINT, hook)          # as the fork hook restores the mask: not raised there
     print("not raised in the hook", flush=True)
 
     def later():
@@ -213,10 +213,10 @@ def test_ctrl_c_let_through_inside_the_fork_hook_is_raised_at_the_next_call_outs
 _FORKED_MEANWHILE = textwrap.dedent("""
     import logging, os, signal, sys, types
     sys.argv[0] = "-m"
-    from identification.cli import command_line as cl
+    from identification.cli import command_line as cl, signals as sg
 
-    cl._hold_signals_while_forking()
-    cl._signalled, cl._ended = 0, False
+    sg._hold_signals_while_forking()
+    sg._signalled, sg._ended = 0, False
 
     def plain():
         return 1
@@ -228,9 +228,9 @@ _FORKED_MEANWHILE = textwrap.dedent("""
             return 1
     finalizer = types.SimpleNamespace(f_code=plain.__code__, f_back=types.SimpleNamespace(
         f_code=Held.__del__.__code__, f_back=None))
-    print("fragile beneath", cl._in_the_standard_library(inside), cl._in_the_standard_library(finalizer),
-          cl._in_the_standard_library(types.SimpleNamespace(f_code=plain.__code__, f_back=None)), flush=True)
-    cl._raise_interrupt(signal.SIGINT, inside)
+    print("fragile beneath", sg._in_the_standard_library(inside), sg._in_the_standard_library(finalizer),
+          sg._in_the_standard_library(types.SimpleNamespace(f_code=plain.__code__, f_back=None)), flush=True)
+    sg._raise_interrupt(signal.SIGINT, inside)
     pid = os.fork()                         # the child inherits the waiting hook: the Ctrl-C is not its own
     if pid == 0:
         try:

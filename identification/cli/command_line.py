@@ -20,6 +20,8 @@ import signal
 import sys
 
 from .. import __version__
+from . import signals
+from .signals import EXIT_TERMINATED, Terminated
 from .util import OutputFolders, Parser, read_recording_arg
 from ..errors import InputError
 
@@ -133,193 +135,6 @@ def _silence_stdout() -> None:
         os.close(devnull)
 
 
-class Terminated(BaseException):
-    """SIGTERM, raised where the command is, so that it unwinds as after Ctrl-C: its output undone
-    (:class:`~identification._files.OutputFolders`), its temporary folders removed, its workers stopped."""
-
-
-#: Exit status after SIGTERM: 128 + 15, what a shell reports for a program SIGTERM stopped.
-EXIT_TERMINATED = 143
-
-
-#: The exit status of a signal that came while the command ran (0: none): a library that catches the
-#: exception a signal raised and raises its own (a compiler wrapping it) still ends as that signal's run.
-_signalled = 0
-
-
-#: Seconds a terminated command has to unwind before it is ended where it stands.
-TERMINATE_GRACE_S = 10.0
-
-#: The timer of :data:`TERMINATE_GRACE_S` (None: no SIGTERM yet); cancelled once the command has ended.
-_grace_timer = None
-
-
-def _force_exit() -> None:
-    """End a terminated run that did not unwind in time (a library that swallowed the exception, or holds a
-    lock the unwinding needs): its output under way is undone first, from this timer's thread
-    (:func:`identification._files.undo_at_forced_exit`)."""
-    try:
-        files = sys.modules.get("identification._files")
-        if files is not None:
-            files.undo_at_forced_exit()
-        sys.stderr.write("cleatfmu: terminated\n")
-        sys.stderr.flush()
-    finally:
-        os._exit(EXIT_TERMINATED)
-
-
-#: Standard-library code where an exception raised by a signal handler is ignored ("Exception ignored in")
-#: or leaves a lock held: the logging module's locks (taken around every fork), the import machinery, the
-#: abstract base classes' subclass checks (called from C, which drops the exception), the weak references'
-#: callbacks (called by the garbage collector, which drops it too).
-_FRAGILE = ("logging" + os.sep + "__init__.py", "<frozen importlib", "<frozen abc>", os.sep + "_weakrefset.py",
-            os.sep + "weakref.py")
-#: Functions whose exceptions the interpreter drops wherever they are defined: finalizers.
-_FRAGILE_FUNCTIONS = ("__del__",)
-
-
-def _in_the_standard_library(frame) -> bool:
-    """Whether `frame`, or a frame that called it, runs code in which a signal's exception must not be
-    raised (:data:`_FRAGILE`, the fork hooks): a plain function called from the logging module's fork hook
-    (a weak set's iterator) is as fragile as the hook."""
-    if _forking:
-        return True
-    while frame is not None:
-        code = frame.f_code
-        if code in _FORK_HOOKS or code.co_name in _FRAGILE_FUNCTIONS or any(part in code.co_filename
-                                                                           for part in _FRAGILE):
-            return True
-        frame = frame.f_back
-    return False
-
-
-def _raise_now_or_soon(code: int, frame) -> None:
-    """Raise the exception of `code` (:class:`Terminated` for 143, KeyboardInterrupt for 130) where the
-    command is; in fragile standard-library code (:data:`_FRAGILE`: an exception there is printed as
-    "Exception ignored" and dropped, or leaves a lock held) arm a retry 20 ms later instead
-    (:func:`_raise_pending`, on SIGALRM)."""
-    if _in_the_standard_library(frame):
-        if signal.getsignal(signal.SIGALRM) is not _raise_pending:
-            signal.signal(signal.SIGALRM, _raise_pending)
-        signal.setitimer(signal.ITIMER_REAL, 0.02)
-        return
-    raise Terminated() if code == EXIT_TERMINATED else KeyboardInterrupt
-
-
-def _raise_pending(signum, frame):
-    """SIGALRM: the retry of a signal that came in fragile code (:func:`_raise_now_or_soon`); nothing once the
-    command has ended (:data:`_ended`)."""
-    if _signalled and not _ended:
-        _raise_now_or_soon(_signalled, frame)
-
-
-def _raise_terminated(signum, frame):
-    """SIGTERM: raise :class:`Terminated` where the command is (or soon, :func:`_raise_now_or_soon`); after
-    :data:`TERMINATE_GRACE_S` end the run where it stands.  Once the command has ended (:data:`_ended`) a
-    SIGTERM is only remembered."""
-    global _signalled, _grace_timer
-    if _ended:
-        _signalled = _signalled or EXIT_TERMINATED
-        return
-    if _grace_timer is None:
-        import threading
-
-        _grace_timer = threading.Timer(TERMINATE_GRACE_S, _force_exit)
-        _grace_timer.daemon = True
-        _grace_timer.start()
-    _signalled = EXIT_TERMINATED
-    _raise_now_or_soon(EXIT_TERMINATED, frame)
-
-
-def _raise_interrupt(signum, frame):
-    """Ctrl-C: raise KeyboardInterrupt where the command is, or, in fragile standard-library code (an import
-    lock's callback drops it), at the next call outside it (:func:`_raise_at_the_next_safe_call`); once the
-    command has ended (:data:`_ended`), only remember it."""
-    global _signalled
-    if _ended:
-        _signalled = _signalled or 130
-        return
-    _signalled = 130
-    if _in_the_standard_library(frame):
-        _raise_at_the_next_safe_call()
-        return
-    raise KeyboardInterrupt
-
-
-def _raise_at_the_next_safe_call() -> None:
-    """Raise KeyboardInterrupt at the next call or return outside fragile code (:data:`_FRAGILE`), through
-    a profile hook of the main thread that removes itself: no timer, no further signal."""
-    own = (_raise_interrupt.__code__, _raise_at_the_next_safe_call.__code__)
-    pid = os.getpid()
-
-    def hook(frame, event, arg):
-        if os.getpid() != pid:      # a child forked meanwhile inherits the hook: the Ctrl-C is not its own
-            sys.setprofile(None)
-            return
-        if event in ("call", "return") and frame.f_code not in own and frame.f_code is not hook.__code__ \
-                and not _in_the_standard_library(frame):
-            sys.setprofile(None)
-            if not _ended:
-                raise KeyboardInterrupt
-    sys.setprofile(hook)
-
-
-#: Whether the command has ended (its outcome decided, its clean-up done): a signal from here on raises
-#: nothing, which could only escape as a traceback from the command line's own code.
-_ended = False
-
-
-def _previous_sigterm():
-    """SIGTERM's handler before the command (the default where :mod:`identification` deferred it during the
-    imports), or None where the command cannot set its own (not the main thread: a notebook's worker)."""
-    import threading
-
-    import identification
-
-    if threading.current_thread() is not threading.main_thread():
-        return None
-    previous = signal.getsignal(signal.SIGTERM)
-    if previous is identification._defer_interrupt or previous is None:
-        return signal.SIG_DFL
-    return previous
-
-
-def _restore_signals(previous) -> None:
-    """End the command's handling of signals: mark it ended (:data:`_ended`), cancel a pending retry of a
-    signal and the grace timer, and give SIGTERM its `previous` handler back (Ctrl-C keeps raising nothing: the run is about to
-    end with its status)."""
-    global _ended, _grace_timer
-    _ended = True
-    if sys.getprofile() is not None and getattr(sys.getprofile(), "__qualname__", "").startswith(
-            "_raise_at_the_next_safe_call"):
-        sys.setprofile(None)
-    if _grace_timer is not None:
-        _grace_timer.cancel()
-        _grace_timer = None
-    if previous is None:
-        return
-    signal.setitimer(signal.ITIMER_REAL, 0)
-    if signal.getsignal(signal.SIGALRM) is _raise_pending:
-        signal.signal(signal.SIGALRM, signal.SIG_IGN)       # drops a retry already pending
-        signal.signal(signal.SIGALRM, signal.SIG_DFL)
-    signal.signal(signal.SIGTERM, previous)
-
-
-def _answer_early_interrupt() -> None:
-    """Ctrl-C from here on raises KeyboardInterrupt (SIGTERM :class:`Terminated`, :func:`_previous_sigterm`); one
-    that came while the program's modules were imported (:mod:`identification` defers both when it is the
-    program) is raised now."""
-    import identification
-
-    if signal.getsignal(signal.SIGINT) is identification._defer_interrupt:
-        signal.signal(signal.SIGINT, _raise_interrupt)
-    early, identification._interrupted = identification._interrupted, 0
-    if early == signal.SIGINT:
-        raise KeyboardInterrupt
-    if early == signal.SIGTERM:
-        raise Terminated()
-
-
 def _run(argv) -> int:
     parser = build_parser(_command_of(argv))
     try:
@@ -333,8 +148,8 @@ def _run(argv) -> int:
     try:
         with OutputFolders() as folders:
             status = args.func(args)
-            if _signalled:      # a signal whose exception some library swallowed: the run still ends as its
-                raise Terminated() if _signalled == EXIT_TERMINATED else KeyboardInterrupt   # (output undone)
+            if signals._signalled:  # a signal whose exception some library swallowed: the run still ends as
+                raise Terminated() if signals._signalled == EXIT_TERMINATED else KeyboardInterrupt  # its (undone)
             _flush_stdout()
             if status:              # a failed command keeps what it wrote (a report of the readable
                 folders.keep()      # recordings), only the folders it made and left empty go
@@ -388,46 +203,6 @@ def main(argv=None) -> int:
     return status
 
 
-_FORK_GUARD = False
-#: Whether this process is inside a fork (between its hooks): a signal's exception waits as in fragile code.
-_forking = False
-#: The code of the fork hooks: a signal whose handler runs in them (as the mask is restored) is deferred.
-_FORK_HOOKS: set = set()
-
-
-def _hold_signals_while_forking() -> None:
-    """Block SIGINT, SIGTERM (and SIGTERM's retry, SIGALRM) in a thread that forks until the fork is done, in
-    parent and child (once per process); a signal the restored mask lets through inside the hook is deferred
-    there like one in fragile code.  The fork hooks of the standard library (the logging module's locks) run inside the fork: an
-    exception a signal raised there is printed as "Exception ignored" and dropped (seen: Ctrl-C as a report
-    started its worker processes).  Held, the signal comes just after the fork, where the command is."""
-    global _FORK_GUARD
-    if _FORK_GUARD or not hasattr(os, "register_at_fork") or not hasattr(signal, "pthread_sigmask"):
-        return
-    _FORK_GUARD = True
-    held = {signal.SIGINT, signal.SIGTERM, signal.SIGALRM}      # (SIGALRM: SIGTERM's retry)
-    saved: list = []
-
-    def before():
-        global _forking
-        _forking = True
-        saved.append(signal.pthread_sigmask(signal.SIG_BLOCK, held))
-
-    def after():
-        global _forking
-        try:
-            if saved:       # (a signal held meanwhile runs its handler in here, which defers it: _forking)
-                signal.pthread_sigmask(signal.SIG_SETMASK, saved.pop())
-        finally:
-            _forking = False
-
-    # hooks run before a fork in the reverse order of registration, after it in the order: registered after
-    # the logging module's (imported here first), these block first and unblock last
-    import logging  # noqa: F401
-    os.register_at_fork(before=before, after_in_parent=after, after_in_child=after)
-    _FORK_HOOKS.update((before.__code__, after.__code__))      # a signal let through there waits (fragile)
-
-
 def _escape_unprintable_output() -> None:
     """Write what the output's encoding cannot hold (a lone surrogate of a file name not in UTF-8) as an escape
     instead of failing with UnicodeEncodeError after the work is done."""
@@ -469,16 +244,15 @@ def _main(argv=None) -> int:
         print("cleatfmu: error: stdout: closed (the result would be lost); redirect it to a file or a pipe",
               file=sys.stderr)
         return 2
-    global _signalled, _ended
-    _signalled, _ended = 0, False
+    signals._signalled, signals._ended = 0, False
     _escape_unprintable_output()
-    _hold_signals_while_forking()
+    signals._hold_signals_while_forking()
     previous = None
     try:
-        previous = _previous_sigterm()
+        previous = signals._previous_sigterm()
         if previous is not None:
-            signal.signal(signal.SIGTERM, _raise_terminated)
-        _answer_early_interrupt()
+            signal.signal(signal.SIGTERM, signals._raise_terminated)
+        signals._answer_early_interrupt()
         return _run(argv)
     except BrokenPipeError:
         if not _stdout_is_a_pipe():
@@ -492,13 +266,14 @@ def _main(argv=None) -> int:
         print("cleatfmu: terminated", file=sys.stderr)
         return EXIT_TERMINATED
     except Exception:
-        if not _signalled:
+        if not signals._signalled:
             raise
-        print("cleatfmu: " + ("terminated" if _signalled == EXIT_TERMINATED else "interrupted"), file=sys.stderr)
-        return _signalled
+        print("cleatfmu: " + ("terminated" if signals._signalled == EXIT_TERMINATED else "interrupted"),
+              file=sys.stderr)
+        return signals._signalled
     finally:
-        _ended = True           # (set here, before a call gives a pending signal the chance to run)
-        _restore_signals(previous)
+        signals._ended = True   # (set here, before a call gives a pending signal the chance to run)
+        signals._restore_signals(previous)
 
 
 if __name__ == "__main__":  # pragma: no cover
