@@ -5,7 +5,8 @@ it as an error would: its output undone (:class:`~identification._files.OutputFo
 folders removed, its workers stopped; the command line then prints one line and ends with 130 or 143.
 
 Where such an exception would be dropped or printed as "Exception ignored" (the logging module's fork
-hooks, the import machinery, finalizers and weak references' callbacks: :data:`_FRAGILE`), it waits:
+hooks, the import machinery's own frames, finalizers and weak references' callbacks: :data:`_FRAGILE`,
+:data:`_DROPPING`), it waits:
 SIGTERM is raised again 20 ms later, Ctrl-C at the next Python call outside that code.  While the process
 forks (its worker pool) both are held.  A SIGTERM the command does not answer within
 :data:`TERMINATE_GRACE_S` ends the process with its output undone (:func:`_force_exit`).
@@ -55,25 +56,29 @@ def _force_exit() -> None:
 
 
 #: Standard-library code where an exception raised by a signal handler is ignored ("Exception ignored in")
-#: or leaves a lock held: the logging module's locks (taken around every fork), the import machinery, the
-#: abstract base classes' subclass checks (called from C, which drops the exception), the weak references'
-#: callbacks (called by the garbage collector, which drops it too).
-_FRAGILE = ("logging" + os.sep + "__init__.py", "<frozen importlib", "<frozen abc>", os.sep + "_weakrefset.py",
-            os.sep + "weakref.py")
-#: Functions whose exceptions the interpreter drops wherever they are defined: finalizers.
-_FRAGILE_FUNCTIONS = ("__del__",)
+#: or leaves a lock held: the import machinery's own frames (an import lock's callback drops it) and the
+#: abstract base classes' subclass checks (called from C, which drops it).  Only the frame the signal came
+#: in counts: an exception raised in a module being imported ends the import as any error does.
+_FRAGILE = ("<frozen importlib", "<frozen abc>")
+#: Code whose exceptions are dropped with everything it calls: the logging module (its fork hooks take and
+#: re-create its locks around every fork), the weak references' callbacks (called by the garbage
+#: collector), finalizers (``__del__``) and this module's fork hooks (:data:`_FORK_HOOKS`).  A signal in
+#: anything they call waits too (seen: a weak set's iterator called from the logging module's child hook).
+_DROPPING = ("logging" + os.sep + "__init__.py", os.sep + "_weakrefset.py", os.sep + "weakref.py")
+_DROPPING_FUNCTIONS = ("__del__",)
 
 
 def _in_the_standard_library(frame) -> bool:
-    """Whether `frame`, or a frame that called it, runs code in which a signal's exception must not be
-    raised (:data:`_FRAGILE`, the fork hooks): a plain function called from the logging module's fork hook
-    (a weak set's iterator) is as fragile as the hook."""
+    """Whether a signal's exception must not be raised in `frame`: fragile code (:data:`_FRAGILE`) there,
+    or code that drops exceptions (:data:`_DROPPING`) there or among its callers."""
     if _forking:
+        return True
+    if frame is not None and any(part in frame.f_code.co_filename for part in _FRAGILE):
         return True
     while frame is not None:
         code = frame.f_code
-        if code in _FORK_HOOKS or code.co_name in _FRAGILE_FUNCTIONS or any(part in code.co_filename
-                                                                           for part in _FRAGILE):
+        if code in _FORK_HOOKS or code.co_name in _DROPPING_FUNCTIONS or any(part in code.co_filename
+                                                                           for part in _DROPPING):
             return True
         frame = frame.f_back
     return False
