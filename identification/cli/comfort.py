@@ -103,7 +103,7 @@ def read_acceleration_csv(path, *, min_duration_s: float = None) -> tuple[list[s
     """
     import numpy as np
 
-    from .._files import parse_number, read_input_text
+    from .._inputs import parse_number, read_input_text
 
     path = Path(path)
     lines = read_input_text(path, encoding="utf-8-sig").splitlines()

@@ -19,7 +19,7 @@ v = -B/2 (right) and +B/2 (left).  The reader takes the four formats and a strai
 (heading channels ignored; slope and banking, which would change the heights, refused); the tracks are the
 two long sections or, with more, interpolated at v = ±B/2.
 
-Readers follow the package's input rules (:func:`identification._files.read_input_bytes`: special files
+Readers follow the package's input rules (:func:`identification._inputs.read_input_bytes`: special files
 refused; one-line :class:`~identification.errors.InputError` naming the file; a non-finite value or a
 non-uniform spacing refused with its row).  Positions count from the file's first point; the road's
 class is :data:`~identification.comfort.road.FILE_CLASS`.  Writers write atomically.
@@ -32,7 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._files import atomic_write_texts, parse_number, read_input_bytes, read_input_text
+from .._files import atomic_write_texts
+from .._inputs import parse_number, read_input_bytes, read_input_text
 from ..errors import InputError
 from .road import DEFAULT_TRACK_WIDTH_M, FILE_CLASS, RoadProfile
 

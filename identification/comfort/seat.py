@@ -144,7 +144,7 @@ def read_seat(path) -> SeatModel:
     ``damping_N_s_per_m``, ``travel_m``, ``end_stop_stiffness_N_per_m`` (SI numbers; a key left out takes
     :data:`DEFAULT_SEAT`'s value) and optionally ``comment`` (text).  Any other key, a value that is no
     number or outside a seat's range raises :class:`~identification.errors.InputError` naming the file."""
-    from .._files import read_json_file
+    from .._inputs import read_json_file
 
     doc = read_json_file(path)
     if not isinstance(doc, dict):

@@ -27,7 +27,8 @@ from __future__ import annotations
 import math
 from pathlib import Path, PureWindowsPath
 
-from .._files import OutputFolders, check_folder, make_folders, read_json_file
+from .._files import OutputFolders, check_folder, make_folders
+from .._inputs import read_json_file
 from ..errors import InputError
 from ..recording.plausibility import check_value
 from ..model.tire_law import value_problem

@@ -96,7 +96,7 @@ def _number(value, keys: str, source) -> float:
 
 def read_body_document(source) -> dict:
     """Read a ``diagnose --json`` document (path) as a dict; InputError naming the file when unreadable."""
-    from .._files import read_json_file
+    from .._inputs import read_json_file
 
     doc = read_json_file(source)
     if not isinstance(doc, dict):

@@ -21,7 +21,8 @@ import math
 import re
 from pathlib import Path
 
-from .._files import OutputFolders, atomic_write_bytes, check_folder, make_folders, parse_json, read_input_bytes
+from .._files import OutputFolders, atomic_write_bytes, check_folder, make_folders
+from .._inputs import parse_json, read_input_bytes
 from ..errors import InputError
 from .export import (_STANDARD_GRAVITY, DEFAULT_UNLOADED_RADIUS_M, _method, _number as _is_number,
                      _recording_name, read_identified)

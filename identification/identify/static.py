@@ -179,7 +179,7 @@ def read_compression(path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         A missing or unreadable file, missing or ambiguous columns, a short row, a
         non-numeric or non-finite cell.
     """
-    from .._files import parse_number, read_input_text
+    from .._inputs import parse_number, read_input_text
 
     path = Path(path)
     text = read_input_text(path, encoding="utf-8-sig")

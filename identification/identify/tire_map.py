@@ -294,7 +294,7 @@ def check_map(doc, source) -> dict:
 
 def read_map(path) -> dict:
     """Read and check a tire map file (``cleatfmu map`` output)."""
-    from .._files import read_json_file
+    from .._inputs import read_json_file
 
     return check_map(read_json_file(path), path)
 

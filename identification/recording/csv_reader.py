@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._files import parse_number
+from .._inputs import parse_number
 from ..errors import InputError
 
 __all__ = ["JITTER_TOLERANCE", "MIN_SAMPLES", "MIN_DURATION_S", "CHUNK_LINES", "read_csv", "check_time",

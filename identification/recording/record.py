@@ -55,7 +55,8 @@ from typing import Any
 
 import numpy as np
 
-from .._files import atomic_write_texts, json_text, read_json_file
+from .._files import atomic_write_texts, json_text
+from .._inputs import read_json_file
 from .acquisition import Acquisition, acquisition_from_sidecar
 from ..errors import InputError
 from .plausibility import OVERRIDE_KEY, check_value, out_of_range

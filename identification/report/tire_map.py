@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .._files import read_json_file
+from .._inputs import read_json_file
 from ..errors import InputError
 from ..identify.tire_map import PRESSURE_TOLERANCE, fit_map
 
