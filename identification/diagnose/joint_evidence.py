@@ -22,6 +22,11 @@
 ``periodic_disturbance`` a spectral line at a fitted frequency in the residual ≥ 8× its floor, present at
                         half that amplitude or more before the impact (in the engine band, the sentence says
                         that a single engine line looks the same).
+
+Where an effect acts on a narrow part of the data, :func:`local_gain` measures it there as well: for
+``periodic_disturbance`` the share of the line's energy (in the channel where the line is strongest)
+that the extended model removes.  The selection accepts a candidate on that share when the rest of the
+residual (a footprint of another shape, say) is too large for the overall gain to show a steady line.
 """
 
 from __future__ import annotations
@@ -34,7 +39,7 @@ from ..recording.condition import ENGINE_BAND_HZ
 from ..recording import FRONT_TIRES, STANDARD_GRAVITY
 from .joint_fit import TractorFit
 
-__all__ = ["check_tractor", "final_evidence", "contact_losses", "interval_text"]
+__all__ = ["check_tractor", "final_evidence", "contact_losses", "interval_text", "local_gain"]
 
 
 def interval_text(value: float, lo: float, hi: float, decimals: int = 3, *, sep: str = "-") -> str:
@@ -241,20 +246,42 @@ def _friction(fit, base):
         f"exponential envelope of the decay")
 
 
-def _periodic(fit, base):
+def _strongest_line(fit, base):
+    """(channel, fitted frequency Hz, amplitude m/s², ratio to the floor) of the strongest line that
+    `base` leaves in its residual at the frequencies `fit` found."""
     pb = fit.model.problem
-    t = pb.rec.time_s
-    pre = t < pb.first_impact_s - 0.05
     best = None
     for tire in pb.channels:
         f = fit.params[f"lug_frequency_{'front' if tire in FRONT_TIRES else 'rear'}"]
         amp, ratio = spectral_line((pb.measured[tire] - base.prediction[tire])[pb.window], pb.rec.sample_rate_hz, f)
-        pre_amp, _ = spectral_line(pb.rec.accel_m_s2[tire][pre], pb.rec.sample_rate_hz, f)
         if best is None or ratio > best[3]:
-            best = (tire, f, amp, ratio, pre_amp)
-    tire, f, amp, ratio, pre_amp = best
+            best = (tire, f, amp, ratio)
+    return best
+
+
+def _line_removed(fit, base) -> float:
+    """Share of the strongest residual line's energy that `fit` removes (0 where it adds to the line)."""
+    pb = fit.model.problem
+    tire, f, amp, _ = _strongest_line(fit, base)
+    after, _ = spectral_line((pb.measured[tire] - fit.prediction[tire])[pb.window], pb.rec.sample_rate_hz, f)
+    return max(0.0, 1.0 - (after / amp) ** 2) if amp > 0 else 0.0
+
+
+def local_gain(effect: str, fit: TractorFit, base: TractorFit) -> float | None:
+    """Share of what `base` leaves unexplained that `fit` removes where `effect` acts, or None for an
+    effect judged on the whole residual alone (see the module's text)."""
+    return _line_removed(fit, base) if effect == "periodic_disturbance" else None
+
+
+def _periodic(fit, base):
+    pb = fit.model.problem
+    t = pb.rec.time_s
+    pre = t < pb.first_impact_s - 0.05
+    tire, f, amp, ratio = _strongest_line(fit, base)
+    pre_amp, _ = spectral_line(pb.rec.accel_m_s2[tire][pre], pb.rec.sample_rate_hz, f)
     text = (f"{f:.2f} Hz line of {amp:.2f} m/s^2 in {tire} all through the residual ({ratio:.0f}x the spectral "
-            f"floor), {pre_amp:.2f} m/s^2 already before the impact: steady, at speed / {pb.rec.speed_m_s / f:.3f} m")
+            f"floor), {pre_amp:.2f} m/s^2 already before the impact: steady, at speed / {pb.rec.speed_m_s / f:.3f} m; "
+            f"the extended model removes {_line_removed(fit, base):.0%} of the line's energy")
     if f >= ENGINE_BAND_HZ[0]:
         # the conditioning removes an engine by its orders; one line alone looks the same as the lugs or the road
         text += (f"; the line lies in the engine band (from {ENGINE_BAND_HZ[0]:.0f} Hz) and an engine line without "

@@ -4,8 +4,10 @@ Round by round every available effect (:data:`~identification.model.fitting.EFFE
 is added to the current model and the extended model is fitted to all
 channels.  A candidate qualifies when its BIC (on n_eff = n · min(1, 2 f_c / f_s)
 independent samples per channel) improves by ≥ 10, it removes ≥ 25 % of the
-noise-weighted residual energy, its parameters lie within their physical
-bounds and it passes its physical gate
+noise-weighted residual energy (or, for an effect that acts on a narrow part
+of the data, ≥ 75 % of the residual there:
+:func:`~identification.diagnose.joint_evidence.local_gain`), its parameters lie
+within their physical bounds and it passes its physical gate
 (:mod:`~identification.diagnose.joint_evidence`).  The best qualifier is named;
 the selection stops when none qualifies.  Candidates are screened at a 2 ms
 step; the named model is refitted at 1 ms.
@@ -25,7 +27,7 @@ import numpy as np
 
 from ..recording import FRONT_TIRES
 from ..workers import one_blas_thread
-from .joint_evidence import check_tractor, final_evidence
+from .joint_evidence import check_tractor, final_evidence, local_gain
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
 from .joint_start import (ENVELOPE_GUESS_M, body_start, enveloped_timings, periodic_start, refine_timing,
                           rescue_start, starting_values)
@@ -37,6 +39,9 @@ __all__ = ["TractorDiagnosis", "diagnose_tractor", "TractorCandidate"]
 
 MIN_DELTA_BIC = 10.0
 MIN_GAIN = 0.25
+#: An effect acting on a narrow part of the data qualifies on removing this share of the residual there
+#: (a steady line's energy), where the rest of the residual hides it from MIN_GAIN.
+MIN_LOCAL_GAIN = 0.75
 MAX_EFFECTS = 5
 SCREEN_STEP_S = 2e-3
 SCREEN_BUDGET = 150
@@ -53,6 +58,7 @@ class TractorCandidate:
     passed_gate: bool
     qualified: bool
     evidence: dict            # effect -> sentence
+    local_gain: float | None = None   # share of the residual removed where the effect acts, if judged so
 
 
 @dataclass(frozen=True, eq=False)
@@ -197,7 +203,8 @@ def _candidate_start(model: TractorFitModel, current: TractorFit, start0: dict) 
         arrivals = current.model.arrivals(current.params)
         for tire in pb.channels:
             est = periodic_start(pb.rec, tire, first_impact_s=pb.first_impact_s, cutoff_hz=pb.cutoff_hz,
-                                 k=s[f"k_{tire}"], c=s[f"c_{tire}"], arrival=arrivals[tire]) or \
+                                 k=s[f"k_{tire}"], c=s[f"c_{tire}"], arrival=arrivals[tire],
+                                 residual=pb.measured[tire] - current.prediction[tire], window=pb.window) or \
                 {"lug_frequency": 10.0, "lug_amplitude": 1e-4, "lug_phase": 0.0}
             axle = "front" if tire in FRONT_TIRES else "rear"
             s.setdefault(f"lug_frequency_{axle}", est["lug_frequency"])
@@ -224,8 +231,9 @@ def _try(job):
     else:
         fit = fit_tractor(model, start, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET)
     checks = [check_tractor(effect, fit, current) for effect in new]
+    local = local_gain(new[0], fit, current) if len(new) == 1 else None
     return TractorCandidate("+".join(new), fit, math.nan, math.nan, all(ok for ok, _ in checks), False,
-                            {effect: text for effect, (_, text) in zip(new, checks)})
+                            {effect: text for effect, (_, text) in zip(new, checks)}, local)
 
 
 def _judge(cand, current_sse, current_p, n, n_eff):
@@ -233,8 +241,10 @@ def _judge(cand, current_sse, current_p, n, n_eff):
     sse = fit.weighted_sse()
     gain = 1.0 - sse / current_sse
     dbic = _bic(current_sse, n, n_eff, current_p) - _bic(sse, n, n_eff, len(fit.model.names))
-    qualified = bool(cand.passed_gate and fit.in_bounds and dbic >= MIN_DELTA_BIC and gain >= MIN_GAIN)
-    return TractorCandidate(cand.effect, fit, float(dbic), float(gain), cand.passed_gate, qualified, cand.evidence)
+    enough = gain >= MIN_GAIN or (cand.local_gain is not None and cand.local_gain >= MIN_LOCAL_GAIN)
+    qualified = bool(cand.passed_gate and fit.in_bounds and dbic >= MIN_DELTA_BIC and enough)
+    return TractorCandidate(cand.effect, fit, float(dbic), float(gain), cand.passed_gate, qualified, cand.evidence,
+                            cand.local_gain)
 
 
 @one_blas_thread
