@@ -282,3 +282,69 @@ def test_the_program_chooses_its_temporary_folder_without_the_probe_file(tmp_pat
                          env=dict(os.environ, TMPDIR=str(tmp_path)))
     assert res.stdout.strip() == "True []", (res.stdout, res.stderr)
     assert list(tmp_path.iterdir()) == []
+
+
+_IN_A_LIBRARY_IMPORT = textwrap.dedent("""
+    import os, signal, sys
+    sys.argv[0] = "-m"
+    from identification.cli import signals as sg
+
+    sg._signalled, sg._ended = 0, False
+    signal.signal(signal.SIGINT, sg._raise_interrupt)
+
+    class Finder:               # Ctrl-C as numba's compiled dispatcher imports its device arrays
+        def find_spec(self, name, path, target=None):
+            if name == "numba._devicearray":
+                os.kill(os.getpid(), signal.SIGINT)
+            return None
+    sys.meta_path.insert(0, Finder())
+    def after():
+        return 1
+    try:
+        import numba
+        after()                 # (the next Python call raises it)
+        print("lost")
+    except KeyboardInterrupt:
+        print("raised after the import:", hasattr(numba, "core") and hasattr(numba, "njit"), flush=True)
+""")
+
+
+def test_ctrl_c_while_a_library_imports_itself_waits_for_the_import():
+    """The fresh-clone CI of 50349fb saw a Ctrl-C raised in an import finder under numba's compiled dispatcher,
+    whose initialisation printed the traceback and left numba half imported ("module 'numba' has no attribute
+    'core'" on every tire): a library importing itself counts as fragile, the program's own modules do not."""
+    res = subprocess.run([sys.executable, "-c", _IN_A_LIBRARY_IMPORT], capture_output=True, text=True,
+                         timeout=120)
+    assert res.stdout.splitlines() == ["raised after the import: True"], (res.stdout, res.stderr)
+    assert "Traceback" not in res.stderr, res.stderr
+
+
+def test_a_library_module_body_being_imported_is_fragile_the_programs_own_is_not():
+    """The frame chain decides: the innermost module body being imported, a library's or the package's."""
+    import types
+
+    import numpy
+
+    from identification.cli import signals as sg
+    from identification.model import tractor
+    importlib = types.SimpleNamespace(f_code=compile("pass", "<frozen importlib._bootstrap>", "exec"), f_back=None)
+
+    def body(module):
+        return types.SimpleNamespace(f_code=compile("pass", module.__file__, "exec"), f_back=importlib)
+
+    def plain_under(parent):
+        return types.SimpleNamespace(f_code=(lambda: 1).__code__, f_back=parent)
+
+    library, own = body(numpy), body(tractor)
+    assert sg._in_the_standard_library(plain_under(library))
+    assert not sg._in_the_standard_library(plain_under(own))
+    # the package's module importing a library: the library's body is the innermost, and decides
+    importing_from_own = types.SimpleNamespace(f_code=importlib.f_code, f_back=plain_under(own))
+    assert sg._in_the_standard_library(plain_under(types.SimpleNamespace(f_code=library.f_code,
+                                                                         f_back=importing_from_own)))
+    # and the package's module imported from a library's: the package's is the innermost
+    importing_from_library = types.SimpleNamespace(f_code=importlib.f_code, f_back=plain_under(library))
+    assert not sg._in_the_standard_library(plain_under(types.SimpleNamespace(f_code=own.f_code,
+                                                                             f_back=importing_from_library)))
+    # a library's code called (not imported) from the package: no module body being imported
+    assert not sg._in_the_standard_library(plain_under(None))

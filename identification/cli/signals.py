@@ -6,7 +6,8 @@ folders removed, its workers stopped; the command line then prints one line and 
 
 Where such an exception would be dropped or printed as "Exception ignored" (the logging module's fork
 hooks, the import machinery's own frames, finalizers and weak references' callbacks: :data:`_FRAGILE`,
-:data:`_DROPPING`), it waits:
+:data:`_DROPPING`), or where a library is importing itself (a compiled module's initialisation that
+prints the exception of an import it makes, and leaves the library half imported: seen with numba), it waits:
 SIGTERM is raised again 20 ms later, Ctrl-C at the next Python call outside that code.  While the process
 forks (its worker pool) both are held.  A SIGTERM the command does not answer within
 :data:`TERMINATE_GRACE_S` ends the process with its output undone (:func:`_force_exit`).
@@ -68,20 +69,50 @@ _DROPPING = ("logging" + os.sep + "__init__.py", os.sep + "_weakrefset.py", os.s
 _DROPPING_FUNCTIONS = ("__del__",)
 
 
+#: This package's folder: a module of it being imported is the program's own code (a signal is raised there).
+_PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
+
+
 def _in_the_standard_library(frame) -> bool:
     """Whether a signal's exception must not be raised in `frame`: fragile code (:data:`_FRAGILE`) there,
-    or code that drops exceptions (:data:`_DROPPING`) there or among its callers."""
+    code that drops exceptions (:data:`_DROPPING`) there or among its callers, or a library importing
+    itself (:func:`_in_a_library_import`)."""
     if _forking:
         return True
     if frame is not None and any(part in frame.f_code.co_filename for part in _FRAGILE):
         return True
+    library_import = None       # (decided by the innermost module body being imported)
     while frame is not None:
         code = frame.f_code
         if code in _FORK_HOOKS or code.co_name in _DROPPING_FUNCTIONS or any(part in code.co_filename
                                                                            for part in _DROPPING):
             return True
+        if library_import is None and _imported_body(frame):
+            library_import = _a_library(frame)
         frame = frame.f_back
-    return False
+    return bool(library_import)
+
+
+def _imported_body(frame) -> bool:
+    """Whether `frame` runs the body of a module being imported."""
+    return frame.f_code.co_name == "<module>" and frame.f_back is not None \
+        and "<frozen importlib" in frame.f_back.f_code.co_filename
+
+
+def _a_library(frame) -> bool:
+    """Whether `frame` runs code outside this package (:data:`_PACKAGE`)."""
+    return not os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE)
+
+
+def _outermost_library_import(frame):
+    """The outermost frame among `frame` and its callers that runs a library's module body being imported
+    (None: no library is importing itself): a Ctrl-C that came beneath it waits until it has returned."""
+    found = None
+    while frame is not None:
+        if _imported_body(frame) and _a_library(frame):
+            found = frame
+        frame = frame.f_back
+    return found
 
 
 def _raise_now_or_soon(code: int, frame) -> None:
@@ -132,20 +163,28 @@ def _raise_interrupt(signum, frame):
         return
     _signalled = 130
     if _in_the_standard_library(frame):
-        _raise_at_the_next_safe_call()
+        _raise_at_the_next_safe_call(frame)
         return
     raise KeyboardInterrupt
 
 
-def _raise_at_the_next_safe_call() -> None:
+def _raise_at_the_next_safe_call(frame=None) -> None:
     """Raise KeyboardInterrupt at the next call or return outside fragile code (:data:`_FRAGILE`), through
-    a profile hook of the main thread that removes itself: no timer, no further signal."""
+    a profile hook of the main thread that removes itself: no timer, no further signal.  Beneath a library
+    importing itself (:func:`_outermost_library_import` of `frame`, the frame the signal came in) it looks
+    no further until that import has returned (a check of the whole stack at every call of a library's
+    import made scipy's take 30 s)."""
     own = (_raise_interrupt.__code__, _raise_at_the_next_safe_call.__code__)
     pid = os.getpid()
+    barrier = [_outermost_library_import(frame)]
 
     def hook(frame, event, arg):
         if os.getpid() != pid:      # a child forked meanwhile inherits the hook: the Ctrl-C is not its own
             sys.setprofile(None)
+            return
+        if barrier[0] is not None:
+            if event == "return" and frame is barrier[0]:
+                barrier[0] = None
             return
         if event in ("call", "return") and frame.f_code not in own and frame.f_code is not hook.__code__ \
                 and not _in_the_standard_library(frame):
