@@ -162,7 +162,50 @@ def test_a_channel_left_above_its_noise_floor_takes_the_free_decays_c_and_keeps_
         <= rl["c_ci"][1]
     assert rl["k_source"] == "joint_fit" and rl["k"] == fit.params["k_FL"]
     assert all(doc[t]["c_source"] == "joint_fit" and doc[t]["c"] == fit.params[f"c_{t}"] for t in ("FR", "RR"))
+    # the free decay's values, with an interval that holds the joint fit's interval too (two estimates that
+    # disagree: the truth may lie by either)
+    for tire, q in (("RL", "k"), ("RL", "c"), ("FL", "c")):
+        lo, hi = doc[tire][f"{q}_ci"]
+        assert lo <= fit.ci[f"{q}_{tire}"][0] and fit.ci[f"{q}_{tire}"][1] <= hi, (tire, q)
+        assert lo <= check[tire][f"{q}_ci"][0] and check[tire][f"{q}_ci"][1] <= hi, (tire, q)
 
 
 def doc_c_source(diag, tire):
     return diag.to_json()["tires"][tire]["c_source"]
+
+
+def test_a_named_steady_line_is_taken_out_of_the_channel_before_its_free_decay_is_fitted(corners):
+    """A 19 Hz line a tenth of the impact's peak, riding on a clean corner's channel (the rig's recording, no lugs): taken out at the fitted
+    lug frequency, the channel is the clean one again to 3 % of the line's amplitude, and the free decay's
+    k and c are the clean channel's; left in, they are not."""
+    import numpy as np
+
+    from identification.diagnose.free_decay import _without_the_line
+    from identification.identify.waveform import identify_waveform
+    from identification.recording import STANDARD_GRAVITY
+    from identification.recording.preprocess import preprocess
+
+    run, pb, start, fit = corners
+    rec = run.recording
+    amp = 0.1 * float(np.max(np.abs(rec.accel_m_s2["FL"])))
+    line = amp * np.sin(2 * np.pi * 19.0 * rec.time_s + 0.7)
+    lined = dataclasses.replace(rec, accel_m_s2={**rec.accel_m_s2, "FL": rec.accel_m_s2["FL"] + line})
+    final = dataclasses.replace(fit, params={**fit.params, "lug_frequency_front": 19.0})
+    diag = dataclasses.replace(_diagnosis(pb, start, fit, final), effects=["periodic_disturbance"])
+    cleaned = _without_the_line(lined, "FL", diag)
+    assert np.max(np.abs(cleaned.accel_m_s2["FL"] - rec.accel_m_s2["FL"])) < 0.03 * amp     # (the impact projects)
+    assert cleaned.accel_m_s2["FR"] is rec.accel_m_s2["FR"]
+    assert _without_the_line(lined, "FL", _diagnosis(pb, start, fit, final)) is lined   # no line named
+
+    def decay(r):
+        sig = preprocess(r, ["FL"], cutoff_hz=pb.cutoff_hz, min_peaks=1)["FL"]
+        return identify_waveform(sig, r.wheel_load_N["FL"] / STANDARD_GRAVITY)
+
+    clean, fixed = decay(rec), decay(cleaned)
+    assert abs(fixed.k / clean.k - 1) < 1e-3 and abs(fixed.c / clean.c - 1) < 1e-2
+    from identification.errors import InputError
+    try:
+        raw = decay(lined)
+    except InputError:          # (a line half the impact's peak: no decaying oscillation found at all)
+        return
+    assert abs(raw.k / clean.k - 1) > 3e-3 or abs(raw.c / clean.c - 1) > 3e-2

@@ -2,7 +2,8 @@
 
 Where a hub rings as an independent corner (the diagnosis names no body coupling) with a linear tire
 (no friction, no progressive stiffness: the decay's shape is then the damped sinusoid, and the fit
-explains its window to R² >= :data:`MIN_DECAY_R2`), the waveform fit of its free decay
+explains its window to R² >= :data:`MIN_DECAY_R2`; a named steady line is taken out of the channel first,
+:func:`_without_the_line`), the waveform fit of its free decay
 (:func:`identification.identify.waveform.identify_waveform`) gives k and c from the part of the record that
 needs the least of the model: the tire on flat ground.  The joint fit's k and c
 must agree with it within their joint 95 % interval, √(h_joint² + h_decay²) (h the half-widths, each
@@ -11,7 +12,7 @@ Where the joint fit's k or c lies outside the free decay's own 95 % interval, th
 by what its model gets wrong in the impact (a cleat shape, a footprint, an acquisition chain): the
 tire's k and c are then the free decay's (``"k_source": "free_decay"``; the extended model keeps its
 own in ``parameters``, as its FMUs carry them), each interval the free decay's stretched to hold the
-joint fit's estimate too, and a warning says so, by how much (and in joint half-widths where the two
+joint fit's interval too, and a warning says so, by how much (and in joint half-widths where the two
 intervals do not even overlap so far).  Where both lie inside but the joint model leaves the channel
 above its noise floor, c alone is the free decay's (``"c_source": "free_decay"``): the decay rate is
 what a mis-modelled impact pulls (its energy input trades against the damping), the frequency is held
@@ -42,11 +43,14 @@ Every check entry carries that range (``k_range``, ``c_range``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
+
+import numpy as np
 
 from ..errors import InputError
 from ..recording.preprocess import preprocess
-from ..recording import STANDARD_GRAVITY
+from ..recording import FRONT_TIRES, STANDARD_GRAVITY
 from ..identify.waveform import ONE_MODE_R2, identify_waveform
 
 __all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS", "UNDETERMINED_SHARE"]
@@ -60,8 +64,9 @@ BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
 #: The waveform fit must explain its window to this R² to count as the free decay of a linear corner (below
 #: it: the tire still on the cleat, a progressive tire or a coupled body the diagnosis did not name).
 MIN_DECAY_R2 = ONE_MODE_R2
-#: Named, these make the decay's shape other than a damped sinusoid (a steady line rides on it).
-SHAPE_EFFECTS = ("friction_damping", "nonlinear_stiffness", "periodic_disturbance")
+#: Named, these make the decay's shape other than a damped sinusoid.  (A named steady line rides on it and
+#: is taken out first: :func:`_without_the_line`.)
+SHAPE_EFFECTS = ("friction_damping", "nonlinear_stiffness")
 
 
 def free_decay_check(diag) -> dict:
@@ -79,7 +84,7 @@ def free_decay_check(diag) -> dict:
             out[tire] = _channel_fit_instead(diag, tire)
             continue
         try:
-            sig = preprocess(rec, [tire], cutoff_hz=pb.cutoff_hz, min_peaks=1)[tire]
+            sig = preprocess(_without_the_line(rec, tire, diag), [tire], cutoff_hz=pb.cutoff_hz, min_peaks=1)[tire]
             wave = identify_waveform(sig, rec.wheel_load_N[tire] / STANDARD_GRAVITY, source=rec.source)
         except InputError as exc:
             out[tire] = {"valid": False, "why_not": f"no waveform fit: {exc.problem}"}
@@ -124,6 +129,22 @@ def free_decay_check(diag) -> dict:
         entry.update(_searched(diag, tire))
         _undetermined(diag, tire, entry)
     return out
+
+
+def _without_the_line(rec, tire: str, diag):
+    """`rec` with the steady line of a named ``periodic_disturbance`` taken out of the tire's channel: the
+    sinusoid at the fitted lug frequency of its axle, least squares over the whole record (the line runs
+    through it, the impact's transient projects little on it), so that the decay is the tire's alone."""
+    if "periodic_disturbance" not in diag.effects:
+        return rec
+    freq = diag.final.params.get(f"lug_frequency_{'front' if tire in FRONT_TIRES else 'rear'}")
+    if not freq:
+        return rec
+    t, x = rec.time_s, rec.accel_m_s2[tire]
+    w = 2 * math.pi * float(freq)
+    basis = np.column_stack([np.sin(w * t), np.cos(w * t), np.ones_like(t)])
+    b = np.linalg.lstsq(basis, x, rcond=None)[0]
+    return dataclasses.replace(rec, accel_m_s2={**rec.accel_m_s2, tire: x - basis[:, :2] @ b[:2]})
 
 
 def _searched(diag, tire: str) -> dict:
@@ -230,7 +251,9 @@ def _channel_fit_instead(diag, tire: str) -> dict:
 def reported(value: float, ci, check: dict, q: str) -> tuple[float, list]:
     """The tire's value and interval of quantity `q` ('k' or 'c'): the joint fit's, or, where the joint fit's k
     or c lies outside the free decay's interval (and, for c, where the joint model leaves the channel above its
-    noise floor), the free decay's with its interval stretched to hold the joint fit's estimate too; where the
+    noise floor), the free decay's with its interval stretched to hold the joint fit's interval too (two
+    estimates that disagree: the truth may lie by either, and a slight model error in the decay (a line
+    taken out, a footprint) makes its white-noise interval too narrow); where the
     joint fit collapsed (:func:`collapsed`), the channel's own fit's with the range searched; where the model leaves too much of the channel unexplained (``undetermined``), the
     channel's own fit's (no body named: :func:`_undetermined`) or the joint fit's, with the range searched."""
     if check.get("collapsed"):
@@ -242,4 +265,4 @@ def reported(value: float, ci, check: dict, q: str) -> tuple[float, list]:
     if not check.get("valid") or not (check.get("prefer") or (q == "c" and check.get("prefer_c"))):
         return float(value), [float(v) for v in ci]
     lo, hi = check[f"{q}_ci"]
-    return float(check[q]), [float(min(value, lo)), float(max(value, hi))]
+    return float(check[q]), [float(min(ci[0], value, lo)), float(max(ci[1], value, hi))]
