@@ -252,7 +252,7 @@ def reported(value: float, ci, check: dict, q: str) -> tuple[float, list]:
     """The tire's value and interval of quantity `q` ('k' or 'c'): the joint fit's, or, where the joint fit's k
     or c lies outside the free decay's interval (and, for c, where the joint model leaves the channel above its
     noise floor), the free decay's with its interval stretched to hold the joint fit's interval too (two
-    estimates that disagree: the truth may lie by either, and a slight model error in the decay (a line
+    estimates that disagree: the tire's value may lie by either, and a slight model error in the decay (a line
     taken out, a footprint) makes its white-noise interval too narrow); where the
     joint fit collapsed (:func:`collapsed`), the channel's own fit's with the range searched; where the model leaves too much of the channel unexplained (``undetermined``), the
     channel's own fit's (no body named: :func:`_undetermined`) or the joint fit's, with the range searched."""
