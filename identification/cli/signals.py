@@ -76,7 +76,7 @@ _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
 def _in_the_standard_library(frame) -> bool:
     """Whether a signal's exception must not be raised in `frame`: fragile code (:data:`_FRAGILE`) there,
     code that drops exceptions (:data:`_DROPPING`) there or among its callers, or a library importing
-    itself (:func:`_in_a_library_import`)."""
+    itself (the innermost module body being imported is a library's: :func:`_imported_body`)."""
     if _forking:
         return True
     if frame is not None and any(part in frame.f_code.co_filename for part in _FRAGILE):
