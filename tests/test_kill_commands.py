@@ -23,7 +23,8 @@ from identification.rig import run_rig, write_run
 from test_kill_output import SEED, _start, check_beside, check_exit, stop_run, times
 from test_output_set import tree
 
-pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+# kill_suite: run in CI's own step at 20 times each (pytest -m kill_suite), not in the default run
+pytestmark = [pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc"), pytest.mark.kill_suite]
 
 def kill_over(command: list, out: Path, whole_s: float, n: int, tmpdir: Path, is_new) -> dict:
     """Run `command` (which rewrites the files of folder `out`) n times per signal, each stopped at a random
