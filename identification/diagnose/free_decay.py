@@ -50,7 +50,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..recording.preprocess import preprocess
-from ..recording import FRONT_TIRES, STANDARD_GRAVITY
+from ..model.fitting import axle_of
+from ..recording import STANDARD_GRAVITY
 from ..identify.waveform import ONE_MODE_R2, identify_waveform
 
 __all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS", "UNDETERMINED_SHARE"]
@@ -137,7 +138,7 @@ def _without_the_line(rec, tire: str, diag):
     through it, the impact's transient projects little on it), so that the decay is the tire's alone."""
     if "periodic_disturbance" not in diag.effects:
         return rec
-    freq = diag.final.params.get(f"lug_frequency_{'front' if tire in FRONT_TIRES else 'rear'}")
+    freq = diag.final.params.get(f"lug_frequency_{axle_of(tire)}")
     if not freq:
         return rec
     t, x = rec.time_s, rec.accel_m_s2[tire]

@@ -37,6 +37,7 @@ import numpy as np
 
 from ..recording.condition import ENGINE_BAND_HZ
 from ..recording import FRONT_TIRES, STANDARD_GRAVITY
+from ..model.fitting import axle_of
 from .joint_fit import TractorFit
 
 __all__ = ["check_tractor", "final_evidence", "contact_losses", "interval_text", "local_gain"]
@@ -252,17 +253,18 @@ def _strongest_line(fit, base):
     pb = fit.model.problem
     best = None
     for tire in pb.channels:
-        f = fit.params[f"lug_frequency_{'front' if tire in FRONT_TIRES else 'rear'}"]
+        f = fit.params[f"lug_frequency_{axle_of(tire)}"]
         amp, ratio = spectral_line((pb.measured[tire] - base.prediction[tire])[pb.window], pb.rec.sample_rate_hz, f)
         if best is None or ratio > best[3]:
             best = (tire, f, amp, ratio)
     return best
 
 
-def _line_removed(fit, base) -> float:
-    """Share of the strongest residual line's energy that `fit` removes (0 where it adds to the line)."""
+def _line_removed(fit, base, line=None) -> float:
+    """Share of the strongest residual line's energy (`line`: :func:`_strongest_line`'s, found here where
+    None) that `fit` removes (0 where it adds to the line)."""
     pb = fit.model.problem
-    tire, f, amp, _ = _strongest_line(fit, base)
+    tire, f, amp, _ = line or _strongest_line(fit, base)
     after, _ = spectral_line((pb.measured[tire] - fit.prediction[tire])[pb.window], pb.rec.sample_rate_hz, f)
     return max(0.0, 1.0 - (after / amp) ** 2) if amp > 0 else 0.0
 
@@ -277,11 +279,11 @@ def _periodic(fit, base):
     pb = fit.model.problem
     t = pb.rec.time_s
     pre = t < pb.first_impact_s - 0.05
-    tire, f, amp, ratio = _strongest_line(fit, base)
+    line = tire, f, amp, ratio = _strongest_line(fit, base)
     pre_amp, _ = spectral_line(pb.rec.accel_m_s2[tire][pre], pb.rec.sample_rate_hz, f)
     text = (f"{f:.2f} Hz line of {amp:.2f} m/s^2 in {tire} all through the residual ({ratio:.0f}x the spectral "
             f"floor), {pre_amp:.2f} m/s^2 already before the impact: steady, at speed / {pb.rec.speed_m_s / f:.3f} m; "
-            f"the extended model removes {_line_removed(fit, base):.0%} of the line's energy")
+            f"the extended model removes {_line_removed(fit, base, line):.0%} of the line's energy")
     if f >= ENGINE_BAND_HZ[0]:
         # the conditioning removes an engine by its orders; one line alone looks the same as the lugs or the road
         text += (f"; the line lies in the engine band (from {ENGINE_BAND_HZ[0]:.0f} Hz) and an engine line without "

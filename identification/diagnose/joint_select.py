@@ -25,7 +25,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..recording import FRONT_TIRES
 from ..workers import one_blas_thread
 from .joint_evidence import check_tractor, final_evidence, local_gain
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
@@ -33,7 +32,7 @@ from .joint_start import (ENVELOPE_GUESS_M, body_start, enveloped_timings, perio
                           rescue_start, starting_values)
 from .joint_signs import settle_signs
 from .joint_timing import BODY_DEFAULTS
-from ..model.fitting import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, parameter_unit
+from ..model.fitting import BODY_EFFECTS, EFFECTS, TractorFitModel, TractorProblem, axle_of, parameter_unit
 
 __all__ = ["TractorDiagnosis", "diagnose_tractor", "TractorCandidate"]
 
@@ -99,7 +98,7 @@ class TractorDiagnosis:
     def tire_parameters(self, tire: str) -> dict:
         """The parameters of the final model that belong to one tire (its axle's, the shared ones)."""
         fin = self.final
-        axle = "front" if tire in FRONT_TIRES else "rear"
+        axle = axle_of(tire)
         out = {}
         for name in fin.model.names:
             parts = name.rsplit("_", 1)
@@ -206,7 +205,7 @@ def _candidate_start(model: TractorFitModel, current: TractorFit, start0: dict) 
                                  k=s[f"k_{tire}"], c=s[f"c_{tire}"], arrival=arrivals[tire],
                                  residual=pb.measured[tire] - current.prediction[tire], window=pb.window) or \
                 {"lug_frequency": 10.0, "lug_amplitude": 1e-4, "lug_phase": 0.0}
-            axle = "front" if tire in FRONT_TIRES else "rear"
+            axle = axle_of(tire)
             s.setdefault(f"lug_frequency_{axle}", est["lug_frequency"])
             s[f"lug_amplitude_{tire}"], s[f"lug_phase_{tire}"] = est["lug_amplitude"], est["lug_phase"]
     return {name: s[name] for name in model.names}

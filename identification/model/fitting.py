@@ -36,7 +36,8 @@ from ..recording.preprocess import DEFAULT_CUTOFF_HZ, broadband_noise, noise_rms
 from ..recording import FRONT_TIRES, TIRES, Recording
 from . import tire_law
 
-__all__ = ["EFFECTS", "TIRE_EFFECTS", "BODY_EFFECTS", "TractorProblem", "TractorFitModel", "parameter_unit", "UNEXPLAINED_RATIO"]
+__all__ = ["EFFECTS", "TIRE_EFFECTS", "BODY_EFFECTS", "TractorProblem", "TractorFitModel", "parameter_unit", "UNEXPLAINED_RATIO",
+           "axle_of"]
 
 TIRE_EFFECTS = ("enveloping", "lift_off", "nonlinear_stiffness", "friction_damping", "periodic_disturbance")
 BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
@@ -78,7 +79,8 @@ def parameter_unit(name: str) -> tuple[str, str]:
     return _UNITS[name if name in _UNITS else name.rsplit("_", 1)[0]]
 
 
-def _axle(tire: str) -> str:
+def axle_of(tire: str) -> str:
+    """The axle ('front' or 'rear') of a tire channel: the suffix of its axle's parameters (``lug_frequency_front``)."""
     return "front" if tire in FRONT_TIRES else "rear"
 
 
@@ -163,7 +165,7 @@ class TractorProblem:
         return any(t in FRONT_TIRES for t in self.channels) and any(t not in FRONT_TIRES for t in self.channels)
 
     def axles(self) -> tuple:
-        return tuple(a for a in ("front", "rear") if any(_axle(t) == a for t in self.channels))
+        return tuple(a for a in ("front", "rear") if any(axle_of(t) == a for t in self.channels))
 
     def available(self, effect: str, effects=()) -> bool:
         """Whether `effect` can be added to a model with `effects` for these channels."""
@@ -231,7 +233,7 @@ class TractorFitModel:
 
     def law(self, theta: dict, tire: str) -> dict:
         """The extended tire-law parameters of one tire."""
-        axle = _axle(tire)
+        axle = axle_of(tire)
         return tire_law_parameters(
             self.problem.rec, tire, self.effects, k=theta[f"k_{tire}"], c=theta[f"c_{tire}"],
             footprint=theta.get(f"footprint_{axle}"), exponent=theta.get("exponent"), friction=theta.get("friction"),
