@@ -96,8 +96,28 @@ def test_a_limited_axis_is_not_labelled_like_a_saturated_sensor():
     ax.set_ylabel("acceleration / (m/s²)")
     ax.plot([0, 1, 2], [0, 50.0, 0])                      # a model spike far beyond the measurement
     _limit_to(ax, np.array([1.0, -2.0, 1.5]))
-    label = ax.get_ylabel()
-    assert "clipped" not in label and "model peaks beyond it" in label and ax.get_ylim() == (-3.2, 3.2)
+    _limit_to(ax, np.array([1.0, -2.0, 1.5]))             # a second call adds no second note
+    notes = [t.get_text() for t in ax.texts]
+    assert notes == ["axis ±1.6× the measured peak; model peaks beyond it"] and ax.get_ylim() == (-3.2, 3.2)
+    assert "clipped" not in ax.get_ylabel()
+
+
+def test_a_limited_axis_of_a_four_channel_figure_keeps_its_label_within_its_panel():
+    """The note once made each panel's y label longer than the panel (a 2.3 inch panel, a 3.5 inch label):
+    the four labels ran over each other."""
+    import numpy as np
+    from identification.report.plots import figure, finish_channel_axis
+    fig, axes = figure(4, 1, size=(10.0, 2.3 * 4 + 0.8), sharex=True, squeeze=False)
+    for ax in axes[:, 0]:
+        ax.plot([0, 1, 2], [0, 50.0, 0], label="model")
+        finish_channel_axis(ax, np.array([1.0, -2.0, 1.5]))
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    boxes = [ax.yaxis.label.get_window_extent(renderer) for ax in axes[:, 0]]
+    for ax, box in zip(axes[:, 0], boxes):
+        panel = ax.get_window_extent(renderer)
+        assert panel.y0 <= box.y0 and box.y1 <= panel.y1
+    assert all(a.y1 < b.y0 or b.y1 < a.y0 for i, a in enumerate(boxes) for b in boxes[i + 1:])
 
 
 def _fmu_folder(tmp_path, stems):

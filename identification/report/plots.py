@@ -100,7 +100,17 @@ def _limit_to(ax, measured, factor=1.6):
     lo, hi = ax.get_ylim()
     if hi > top or lo < -top:
         ax.set_ylim(-top, top)
-        ax.set_ylabel(ax.get_ylabel() + f"\n(axis ±{factor:g}× the measured peak; model peaks beyond it)")
+        # inside the axis, once: as a second line of the y label it ran beyond a short panel's height, over
+        # its neighbours' labels
+        if not any(getattr(text, "_limit_note", False) for text in ax.texts):
+            note = ax.text(0.005, 0.02, _LIMIT_NOTE.format(factor=factor), transform=ax.transAxes, fontsize=7,
+                           color="0.3", ha="left", va="bottom",
+                           bbox={"facecolor": "white", "alpha": 0.7, "edgecolor": "none", "pad": 1.0})
+            note._limit_note = True
+
+
+#: The note of an axis scaled to the measurement while the model runs beyond it.
+_LIMIT_NOTE = "axis ±{factor:g}× the measured peak; model peaks beyond it"
 
 
 def plot_comparison(cmp, *, title: str | None = None):
