@@ -332,7 +332,9 @@ def unexplained(problem, prediction: dict, channel: str, *, ratio: float = UNEXP
 
     Returns ``{"share", "window", "residual_to_noise"}``: the residual energy
     beyond the noise as a share of the signal energy over the diagnosis window,
-    and the time span [s, s] holding the middle 80 % of that excess energy.
+    and the time span [s, s] holding the middle 80 % of that excess energy; and
+    ``"steady_line"`` where a steady line of the channel's quiet stretch makes up
+    over :data:`LINE_SHARE` of the residual (:func:`residual_line`).
     """
     w = problem.window
     t = problem.rec.time_s[w]
@@ -350,5 +352,44 @@ def unexplained(problem, prediction: dict, channel: str, *, ratio: float = UNEXP
     a = int(np.searchsorted(cum, 0.1 * total))
     b = int(np.searchsorted(cum, 0.9 * total))
     share = (float(np.sum(r ** 2)) - sigma ** 2 * r.size) / float(np.sum(meas ** 2))
-    return {"share": float(max(share, 0.0)), "window": [float(t[a]), float(t[min(b, t.size - 1)])],
-            "residual_to_noise": rms / sigma}
+    out = {"share": float(max(share, 0.0)), "window": [float(t[a]), float(t[min(b, t.size - 1)])],
+           "residual_to_noise": rms / sigma}
+    line = problem.steady_lines.get(channel)
+    if line and line.get("frequency_hz"):
+        found = residual_line(t, r, float(line["frequency_hz"]))
+        if found["share_of_residual"] > LINE_SHARE:
+            out["steady_line"] = found
+    return out
+
+
+#: A steady line is named in what a model leaves when it makes up over this share of the residual's energy.
+LINE_SHARE = 0.25
+#: Half-width of the search for a steady line's frequency in the residual around its quiet stretch's
+#: periodogram peak, Hz (a stretch of a few tenths of a second resolves a few Hz).
+LINE_SEARCH_HZ = 2.0
+
+
+def residual_line(time_s, residual, frequency_hz: float) -> dict:
+    """The steady line in a residual near `frequency_hz`: ``{"frequency_hz", "amplitude_m_s2",
+    "share_of_residual"}``.
+
+    The frequency of the largest least-squares sinusoid (with a constant) within :data:`LINE_SEARCH_HZ`
+    of `frequency_hz`, on a grid of a fifth of the residual's resolution; its amplitude, and its energy as
+    a share of the residual's.
+    """
+    t = np.asarray(time_s, dtype=float)
+    r = np.asarray(residual, dtype=float)
+    step = 0.2 / max(t[-1] - t[0], 1e-9)
+    grid = np.arange(max(step, frequency_hz - LINE_SEARCH_HZ), frequency_hz + LINE_SEARCH_HZ + step, step)
+    best = None
+    for f in grid:
+        arg = 2 * math.pi * f * t
+        basis = np.column_stack([np.cos(arg), np.sin(arg), np.ones_like(t)])
+        coef = np.linalg.lstsq(basis, r, rcond=None)[0]
+        fitted = basis[:, :2] @ coef[:2]
+        energy = float(fitted @ fitted)
+        if best is None or energy > best[0]:
+            best = (energy, float(f), float(math.hypot(coef[0], coef[1])))
+    total = float(r @ r)
+    return {"frequency_hz": best[1], "amplitude_m_s2": best[2],
+            "share_of_residual": best[0] / total if total > 0 else 0.0}
