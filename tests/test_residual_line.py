@@ -62,3 +62,13 @@ def test_a_residual_without_the_line_names_none(rig_with_a_line):
         assert residual_line(lined.rec.time_s[lined.window], (prediction[c] - lined.measured[c])[lined.window],
                              31.7)["share_of_residual"] < LINE_SHARE
         assert math.isfinite(left["residual_to_noise"])
+
+
+def test_the_report_verdict_names_the_line_as_the_command_does():
+    from identification.report.tables import unexplained_flag
+    left = {"share": 0.53, "window": [0.69, 3.92], "residual_to_noise": 16.2,
+            "steady_line": {"frequency_hz": 34.3512, "amplitude_m_s2": 0.6712, "share_of_residual": 0.781}}
+    cell = unexplained_flag(left, 0.731, 0.045)
+    assert "78 % of that residual is a steady 34.35 Hz line of 0.67 m/s²" in cell
+    assert "intervals conditional on the model" in cell
+    assert "steady" not in unexplained_flag(dict(left, steady_line=None), 0.731, 0.045)

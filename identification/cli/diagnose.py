@@ -11,6 +11,7 @@ from .util import (add_example_option, announce_compilation, check_folder, check
                        read_recording_arg, write_files)
 from ..errors import InputError
 from ..diagnose.joint_evidence import interval_text
+from ..diagnose.joint_fit import line_sentence
 from ..diagnose.run import diagnosis_warnings, run_tractor_diagnosis
 from .._files import json_text, temp_prefix
 
@@ -94,11 +95,7 @@ def _tractor_text(diag, gain, verbose: bool = False) -> str:
                 f"{100 * left['share']:.2g} % of the signal energy left, in {left['window'][0]:.3f}-"
                 f"{left['window'][1]:.3f} s" if left else "residual at the noise floor")
         if left and left.get("steady_line"):
-            line = left["steady_line"]
-            flag += (f"; {100 * line['share_of_residual']:.2g} % of that residual is a steady "
-                     f"{line['frequency_hz']:.2f} Hz line of {line['amplitude_m_s2']:.2g} m/s² (there before the "
-                     f"impact too), which the model does not explain: an engine line whose orders the sensor's "
-                     f"filter or sampling hides, or lugs")
+            flag += "; " + line_sentence(left["steady_line"])
         lines.append(f"  {tire}: k {t['k'] / 1e3:.1f} kN/m {_interval(t['k'], t['k_ci'], 1e3, '.1f')}  "
                      f"c {t['c'] / 1e3:.3f} kN s/m {_interval(t['c'], t['c_ci'], 1e3, '.3f')}  "
                      f"NRMSE {t['nrmse_before']:.1%} -> {t['nrmse_after']:.1%} (noise {t['noise_nrmse']:.1%}): {flag}")
