@@ -31,6 +31,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from ..identify.waveform import long_run_variance_ratio
+from ..recording.condition import line_fit, refine_line
 from .joint_jacobian import FAILED, GroupedJacobian, channel_dependence
 from ..model.fitting import SIGNED, UNEXPLAINED_RATIO, TractorFitModel
 
@@ -380,23 +381,15 @@ def residual_line(time_s, residual, frequency_hz: float) -> dict:
     """The steady line in a residual near `frequency_hz`: ``{"frequency_hz", "amplitude_m_s2",
     "share_of_residual"}``.
 
-    The frequency of the largest least-squares sinusoid (with a constant) within :data:`LINE_SEARCH_HZ`
-    of `frequency_hz`, on a grid of a fifth of the residual's resolution; its amplitude, and its energy as
-    a share of the residual's.
+    The frequency of the largest least-squares sinusoid within :data:`LINE_SEARCH_HZ` of `frequency_hz`
+    (at most half of it), as the conditioning finds an engine line's
+    (:func:`identification.recording.condition.refine_line`); its amplitude, and its energy as a share of
+    the residual's.
     """
     t = np.asarray(time_s, dtype=float)
-    r = np.asarray(residual, dtype=float)
-    step = 0.2 / max(t[-1] - t[0], 1e-9)
-    grid = np.arange(max(step, frequency_hz - LINE_SEARCH_HZ), frequency_hz + LINE_SEARCH_HZ + step, step)
-    best = None
-    for f in grid:
-        arg = 2 * math.pi * f * t
-        basis = np.column_stack([np.cos(arg), np.sin(arg), np.ones_like(t)])
-        coef = np.linalg.lstsq(basis, r, rcond=None)[0]
-        fitted = basis[:, :2] @ coef[:2]
-        energy = float(fitted @ fitted)
-        if best is None or energy > best[0]:
-            best = (energy, float(f), float(math.hypot(coef[0], coef[1])))
-    total = float(r @ r)
-    return {"frequency_hz": best[1], "amplitude_m_s2": best[2],
-            "share_of_residual": best[0] / total if total > 0 else 0.0}
+    r = np.asarray(residual, dtype=float)[None, :]
+    f = refine_line(t, r, frequency_hz, min(LINE_SEARCH_HZ, 0.5 * frequency_hz))
+    coef, energy = line_fit(t, r, f)
+    total = float(np.sum(r * r))
+    return {"frequency_hz": f, "amplitude_m_s2": float(math.hypot(*coef[0, 0])),
+            "share_of_residual": energy / total if total > 0 else 0.0}

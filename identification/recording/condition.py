@@ -51,7 +51,7 @@ import numpy as np
 from .preprocess import DEFAULT_CUTOFF_HZ, lowpass, noise_rms
 from .record import FRONT_TIRES, Recording
 
-__all__ = ["condition", "conditioning_json", "ENGINE_BAND_HZ", "LINE_PROMINENCE",
+__all__ = ["condition", "conditioning_json", "line_fit", "refine_line", "ENGINE_BAND_HZ", "LINE_PROMINENCE",
            "SPEED_TOLERANCE"]
 
 #: Span around a channel's impact and its largest burst left out of the engine lines' fits, s (before, after).
@@ -154,7 +154,7 @@ def _quiet_spectra(x: np.ndarray, keep: np.ndarray, fs: float) -> tuple[np.ndarr
     return np.fft.rfftfreq(nfft, 1 / fs), spec, n
 
 
-def _line_fit(t: np.ndarray, channels: np.ndarray, f: float, orders=(1,)) -> tuple[np.ndarray, float]:
+def line_fit(t: np.ndarray, channels: np.ndarray, f: float, orders=(1,)) -> tuple[np.ndarray, float]:
     """Least-squares sinusoids at ``m f`` for every m of `orders`, per channel, beside a constant and a drift:
     (cos and sin coefficients (orders, ch, 2), total power of the fitted sinusoids)."""
     cols = []
@@ -168,13 +168,13 @@ def _line_fit(t: np.ndarray, channels: np.ndarray, f: float, orders=(1,)) -> tup
     return coef[:k].T.reshape(channels.shape[0], len(orders), 2).transpose(1, 0, 2), float(np.sum(fitted * fitted))
 
 
-def _refine(t: np.ndarray, channels: np.ndarray, f0: float, width: float, orders=(1,)) -> float:
+def refine_line(t: np.ndarray, channels: np.ndarray, f0: float, width: float, orders=(1,)) -> float:
     """The fundamental within ``f0 +- width`` of the largest least-squares power of its `orders` on all
     channels."""
     from scipy.optimize import minimize_scalar
 
     def power(f):
-        return _line_fit(t, channels, f, orders)[1]
+        return line_fit(t, channels, f, orders)[1]
 
     # a grid finer than the record's resolution (1 / its span) finds the main lobe, Brent's method its top
     step = 0.2 / (t[-1] - t[0])
@@ -229,12 +229,12 @@ def _engine_lines(t, channels, fs, cutoff_hz, keep, single=False) -> list[dict]:
     def gain(f):
         return float(np.abs(signal.sosfreqz(sos, worN=[f], fs=fs)[1][0]) ** 2)
 
-    f1 = _refine(t, channels, f1, lobe)
+    f1 = refine_line(t, channels, f1, lobe)
     # a lower line whose orders this one is (a 2nd or 3rd order stronger than the first)
     for div in (3, 2):
         fd = f1 / div
         if fd >= lo and _prominent(freq, specs, fd, lobe)[0]:
-            f1 = _refine(t, channels, fd, lobe / div)
+            f1 = refine_line(t, channels, fd, lobe / div)
             break
     orders = [m for m in range(1, MAX_ORDERS + 1) if m * f1 <= 0.45 * fs - lobe - _NEIGHBOURHOOD_HZ
               and (m == 1 or _prominent(freq, specs, m * f1, lobe, ORDER_PROMINENCE)[0])]
@@ -243,8 +243,8 @@ def _engine_lines(t, channels, fs, cutoff_hz, keep, single=False) -> list[dict]:
     #                   names it periodic_disturbance); an engine shows its orders
     # the fundamental refined on all its orders together (the higher ones carry its phase faster), then
     # every order's sinusoid fitted jointly
-    f1 = _refine(t, channels, f1, 0.25 / (t[-1] - t[0]) + lobe / 50, orders)
-    coefs, _ = _line_fit(t, channels, f1, orders)
+    f1 = refine_line(t, channels, f1, 0.25 / (t[-1] - t[0]) + lobe / 50, orders)
+    coefs, _ = line_fit(t, channels, f1, orders)
     for m, coef in zip(orders, coefs):
         coef = coef / gain(m * f1)
         lines.append({"frequency_hz": m * f1, "order": m, "coef": coef,
