@@ -278,9 +278,9 @@ def build_fmu(kind: str, dest, *, start_values: dict | None = None, provenance: 
     if resources:
         raise ValueError("resources are for native FMUs (the pythonfmu backend takes none)")
     fd, tmp_name = temp_beside(dest, ".part")
-    os.close(fd)
     tmp = Path(tmp_name)
     try:
+        os.close(fd)
         with tempfile.TemporaryDirectory(prefix=temp_prefix("build")) as work:
             stage, out_dir = Path(work, "stage"), Path(work, "out")
             stage.mkdir()

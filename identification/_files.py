@@ -74,7 +74,9 @@ def temp_beside(path, suffix: str) -> tuple[int, str]:
     this process's); return ``(fd, name)`` as :func:`tempfile.mkstemp` does.
 
     A SIGKILL leaves such a file behind (nothing can remove it then); the temporaries of `path` whose process
-    is gone are removed first, so the next run that writes `path` clears what a killed one left.
+    is gone are removed first, so the next run that writes `path` clears what a killed one left.  The file is
+    recorded before this returns (a command's Ctrl-C or SIGTERM waits until then), and a command that ends
+    removes what its caller had no time to (:func:`remove_open_temporaries`).
     """
     path = Path(path)
     clear_dead_temporaries(path)
@@ -121,6 +123,18 @@ def undo_at_forced_exit() -> None:
     for name in list(_OPEN_TEMPORARIES):
         _unlink_quietly(name)
     _OPEN_TEMPORARIES.clear()
+
+
+def remove_open_temporaries() -> list[str]:
+    """Remove the temporaries this process made (:func:`temp_beside`) that are still there, and forget them
+    all; return the removed names.  Called as a command ends: a Ctrl-C or SIGTERM between the file's creation
+    and the caller's own clean-up (its ``try``) would leave it otherwise.  A temporary renamed into place or
+    removed since is no longer there; nothing raises."""
+    removed = [name for name in list(_OPEN_TEMPORARIES) if os.path.lexists(name)]
+    for name in removed:
+        _unlink_quietly(name)
+    _OPEN_TEMPORARIES.clear()
+    return removed
 
 
 _CLEARED_TEMP_FOLDERS = False

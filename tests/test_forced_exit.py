@@ -348,3 +348,47 @@ def test_a_library_module_body_being_imported_is_fragile_the_programs_own_is_not
                                                                              f_back=importing_from_library)))
     # a library's code called (not imported) from the package: no module body being imported
     assert not sg._in_the_standard_library(plain_under(None))
+
+
+_TEMPORARY = textwrap.dedent("""
+    import os, signal, sys, tempfile, time
+    from pathlib import Path
+    sys.argv[0] = "-m"              # as ``python -m identification.cli``: the program's own signal handling
+    from identification.cli import command_line as cl, signals as sg
+    from identification._files import temp_beside
+    from identification.cli.signals import Terminated
+
+    root, where = Path(sys.argv[1]), sys.argv[2]
+    real = tempfile.mkstemp
+
+    def mkstemp(*args, **kwargs):   # the file exists, temp_beside has not recorded it yet: SIGTERM now
+        made = real(*args, **kwargs)
+        if where == "inside":
+            os.kill(os.getpid(), signal.SIGTERM)
+            sum(range(10))          # (a signal's handler runs at the next calls)
+        return made
+
+    tempfile.mkstemp = mkstemp
+
+    def command(argv):
+        fd, name = temp_beside(root / "tire.fmu", ".part")
+        print("recorded", flush=True)
+        if where == "after":        # as a signal between temp_beside's return and its writer's try
+            raise Terminated()
+        time.sleep(30)
+
+    cl._run = command
+    sys.exit(cl.main([]))
+""")
+
+
+@pytest.mark.parametrize("where", ["inside", "after"])
+def test_a_sigterm_as_a_temporary_is_made_leaves_no_temporary(tmp_path, where):
+    """Seen in CI's kill suite: ``export`` SIGTERMed at 0.16 s left ``.tire.fmu.PID-XXXX.part`` beside the
+    earlier FMU.  A signal inside :func:`temp_beside` waits until the file is recorded; one after it, before
+    the writer's own ``try``, is cleaned up as the command ends."""
+    res = subprocess.run([sys.executable, "-c", _TEMPORARY, str(tmp_path), where], capture_output=True,
+                         text=True, timeout=60)
+    assert res.returncode == 143 and res.stderr.strip() == "cleatfmu: terminated", (res.returncode, res.stderr)
+    assert res.stdout == "recorded\n"       # the signal waited until the temporary was recorded
+    assert list(tmp_path.iterdir()) == []

@@ -19,7 +19,7 @@ import os
 import signal
 import sys
 
-from .. import __version__
+from .. import __version__, _files
 from . import signals
 from .signals import EXIT_TERMINATED, Terminated
 from .util import OutputFolders, Parser, read_recording_arg
@@ -274,6 +274,7 @@ def _main(argv=None) -> int:
     finally:
         signals._ended = True   # (set here, before a call gives a pending signal the chance to run)
         signals._restore_signals(previous)
+        _files.remove_open_temporaries()    # a signal between a temporary's creation and its writer's try
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -67,6 +67,10 @@ _FRAGILE = ("<frozen importlib", "<frozen abc>")
 #: anything they call waits too (seen: a weak set's iterator called from the logging module's child hook).
 _DROPPING = ("logging" + os.sep + "__init__.py", os.sep + "_weakrefset.py", os.sep + "weakref.py")
 _DROPPING_FUNCTIONS = ("__del__",)
+#: Steps a signal's exception must not cut in two: making a temporary file and recording it for removal
+#: (:func:`identification._files.temp_beside`; cut between the two, the file would stay).  A signal there
+#: waits until the step has returned.  (file name, function name)
+_WHOLE_STEPS = ((os.sep + "_files.py", "temp_beside"),)
 
 
 #: This package's folder: a module of it being imported is the program's own code (a signal is raised there).
@@ -86,6 +90,8 @@ def _in_the_standard_library(frame) -> bool:
         code = frame.f_code
         if code in _FORK_HOOKS or code.co_name in _DROPPING_FUNCTIONS or any(part in code.co_filename
                                                                            for part in _DROPPING):
+            return True
+        if any(code.co_name == name and code.co_filename.endswith(file) for file, name in _WHOLE_STEPS):
             return True
         if library_import is None and _imported_body(frame):
             library_import = _a_library(frame)
