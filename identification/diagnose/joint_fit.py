@@ -370,13 +370,6 @@ LINE_SHARE = 0.25
 LINE_SEARCH_HZ = 2.0
 
 
-def line_sentence(line: dict) -> str:
-    """The words for a steady line in a residual (:func:`residual_line`'s dict), as every output gives them."""
-    return (f"{100 * line['share_of_residual']:.2g} % of that residual is a steady {line['frequency_hz']:.2f} Hz "
-            f"line of {line['amplitude_m_s2']:.2g} m/s² (there before the impact too), which the model does not "
-            f"explain: an engine line whose orders the sensor's filter or sampling hides, or lugs")
-
-
 def residual_line(time_s, residual, frequency_hz: float) -> dict:
     """The steady line in a residual near `frequency_hz`: ``{"frequency_hz", "amplitude_m_s2",
     "share_of_residual"}``.

@@ -26,6 +26,7 @@ from .._files import atomic_write_texts, json_text
 from .batch import FIGURES_STAGING, BatchResult
 from .campaign import result_conditions
 from ..diagnose.joint_evidence import interval_text
+from ..diagnose.wording import effects_sentence
 from .files import not_recommended_params, point_contact_fmu, recommended_fmu, recommended_params
 from .tables import (METHODS_HEADS, TABLE4_HEADS, campaign_table, csv_text, read_truth, ride_table, table4_table,
                      verdict_table, waveform_table)
@@ -165,7 +166,7 @@ def _diagnosis_section(r) -> str:
     d = rep.diagnosis
     if d is not None:
         body = d["body"]
-        effects = ", ".join(d["effects"]) or "none — the four-corner model explains the data to within noise"
+        effects = effects_sentence(d)
         speed = body["speed_m_s"]
         delay = "" if speed["from_delay"] is None else \
             f', {speed["from_delay"] * 3.6:.2f} km/h from the front/rear delay'

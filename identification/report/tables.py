@@ -84,7 +84,7 @@ def unexplained_flag(left: dict | None, nrmse: float, noise: float) -> str:
     """The verdict cell of a tire: at the noise floor, or what is left above it in the numbers beside it."""
     if left is None:
         return '<span class="ok">at the noise floor</span>'
-    from ..diagnose.joint_fit import line_sentence     # the diagnosis' words (imported with the fit's scipy)
+    from ..diagnose.wording import line_sentence       # the diagnosis' words
     return (f'<span class="warn">above the noise floor: residual {left["residual_to_noise"]:.1f}× the noise '
             f'(NRMSE {nrmse:.1%} against {noise:.1%}); the excess is {_share(left["share"])} of the signal energy, '
             f'{left["window"][0]:.2f}–{left["window"][1]:.2f} s'
