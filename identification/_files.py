@@ -137,6 +137,29 @@ def remove_open_temporaries() -> list[str]:
     return removed
 
 
+def own_temp_folders() -> set:
+    """This process's temporary folders (:func:`temp_prefix`) in the temporary directory now."""
+    import re
+
+    folder = tempfile.gettempdir()
+    pattern = re.compile(rf"cleatfmu_[a-z0-9]+_{os.getpid()}-.*")
+    try:
+        return {entry.path for entry in os.scandir(folder) if pattern.fullmatch(entry.name)
+                and entry.is_dir(follow_symlinks=False)}
+    except OSError:
+        return set()
+
+
+def remove_temp_folders(paths) -> None:
+    """Remove the folders `paths` and what they hold; nothing raises.  A command ends by removing the
+    temporary folders it made that are still there (:func:`own_temp_folders` then and at its start): a
+    Ctrl-C or SIGTERM between a folder's creation and its owner's clean-up would leave it otherwise."""
+    import shutil
+
+    for path in paths:
+        shutil.rmtree(path, ignore_errors=True)
+
+
 _CLEARED_TEMP_FOLDERS = False
 
 

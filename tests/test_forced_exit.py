@@ -392,3 +392,33 @@ def test_a_sigterm_as_a_temporary_is_made_leaves_no_temporary(tmp_path, where):
     assert res.returncode == 143 and res.stderr.strip() == "cleatfmu: terminated", (res.returncode, res.stderr)
     assert res.stdout == "recorded\n"       # the signal waited until the temporary was recorded
     assert list(tmp_path.iterdir()) == []
+
+
+_FOLDER = textwrap.dedent("""
+    import os, sys, tempfile
+    from pathlib import Path
+    sys.argv[0] = "-m"
+    from identification.cli import command_line as cl
+    from identification._files import temp_prefix
+    from identification.cli.signals import Terminated
+
+    earlier = tempfile.mkdtemp(prefix=temp_prefix("earlier"))     # this process's, made before the command
+
+    def command(argv):
+        tempfile.mkdtemp(prefix=temp_prefix("build"))              # as a signal between it and its owner's try
+        print("made", flush=True)
+        raise Terminated()
+
+    cl._run = command
+    sys.exit(cl.main([]))
+""")
+
+
+def test_a_sigterm_as_a_temporary_folder_is_made_leaves_no_folder(tmp_path):
+    """A temporary folder the command made and had no time to remove goes as the command ends; one the
+    process made before the command (a notebook's, a test's) stays."""
+    res = subprocess.run([sys.executable, "-c", _FOLDER], capture_output=True, text=True, timeout=60,
+                         env=dict(os.environ, TMPDIR=str(tmp_path)))
+    assert res.returncode == 143 and res.stderr.strip() == "cleatfmu: terminated", (res.returncode, res.stderr)
+    assert res.stdout == "made\n", res.stdout
+    assert [p.name.startswith("cleatfmu_earlier_") for p in tmp_path.iterdir()] == [True]

@@ -248,6 +248,7 @@ def _main(argv=None) -> int:
     _escape_unprintable_output()
     signals._hold_signals_while_forking()
     previous = None
+    folders = _files.own_temp_folders()     # (its own, made before this command: a notebook's, a test's)
     try:
         previous = signals._previous_sigterm()
         if previous is not None:
@@ -275,6 +276,7 @@ def _main(argv=None) -> int:
         signals._ended = True   # (set here, before a call gives a pending signal the chance to run)
         signals._restore_signals(previous)
         _files.remove_open_temporaries()    # a signal between a temporary's creation and its writer's try
+        _files.remove_temp_folders(_files.own_temp_folders() - folders)     # and a folder's and its owner's
 
 
 if __name__ == "__main__":  # pragma: no cover
