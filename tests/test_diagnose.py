@@ -121,8 +121,8 @@ def test_cli_json_fmu_plot_and_no_truth(cli, tmp_path):
               "--plot", tmp_path / "d.png", "--workers", "1")
     assert res.code == 0, res.err
     doc = json.loads(res.out)
-    assert set(doc) == {"tire", "effects", "nrmse_before", "nrmse_after", "k", "c", "k_ci", "c_ci", "parameters",
-                        "evidence"}
+    assert set(doc) == {"tire", "effects", "summary", "nrmse_before", "nrmse_after", "noise_nrmse", "unexplained",
+                        "k", "c", "k_ci", "c_ci", "parameters", "evidence"}
     assert doc["tire"] == tire and doc["effects"][0] == "enveloping"
     assert doc["k_ci"][0] < doc["k"] < doc["k_ci"][1] and doc["c_ci"][0] < doc["c"] < doc["c_ci"][1]
     assert doc["parameters"]["footprint"]["unit"] == "m" and 0.1 < doc["parameters"]["footprint"]["value"] < 0.6

@@ -45,6 +45,15 @@ def test_a_diagnosis_that_names_nothing_but_leaves_a_residual_says_so(unexplaine
     text = effects_sentence(doc)
     assert text.startswith("none named, yet the four-corner model leaves " + ", ".join(left))
     assert "within its noise" not in text
+    assert doc["summary"] == text                 # the JSON carries the first line's words
+    for tire in doc["tires"]:                     # --tire's JSON: that tire's residual and words alone
+        one = unexplained_diagnosis.tire_json(tire)
+        assert one["unexplained"] == doc["tires"][tire]["unexplained"]
+        assert one["noise_nrmse"] == doc["tires"][tire]["noise_nrmse"]
+        others = [t for t in doc["tires"] if t != tire]
+        assert (one["summary"].startswith(f"none named, yet the four-corner model leaves {tire} above")
+                if one["unexplained"] else one["summary"].startswith("none: ")), one["summary"]
+        assert not any(f" {t} " in one["summary"] or f" {t}," in one["summary"] for t in others), one["summary"]
 
 
 def test_the_report_does_not_call_an_unexplained_diagnosis_within_noise(unexplained_diagnosis):

@@ -11,7 +11,7 @@ from .util import (add_example_option, announce_compilation, check_folder, check
                        read_recording_arg, write_files)
 from ..errors import InputError
 from ..diagnose.joint_evidence import interval_text
-from ..diagnose.wording import effects_sentence, line_sentence
+from ..diagnose.wording import line_sentence
 from ..diagnose.run import diagnosis_warnings, run_tractor_diagnosis
 from .._files import json_text, temp_prefix
 
@@ -75,7 +75,7 @@ def _tractor_text(diag, gain, verbose: bool = False) -> str:
     doc = diag.to_json(nrmse_before=gain.nrmse_before, nrmse_after=gain.nrmse_after)
     body = doc["body"]
     rec = diag.problem.rec
-    lines = [f"{rec.source}: effects the four-corner model misses: {effects_sentence(doc)}"]
+    lines = [f"{rec.source}: effects the four-corner model misses: {doc['summary']}"]
     if rec.record_span_s is not None:
         lines.append(f"  analysed {rec.time_s[0]:.3f}-{rec.time_s[-1]:.3f} s of the {rec.record_span_s[0]:.3f}-"
                      f"{rec.record_span_s[1]:.3f} s record (the cleat impacts and their free decay)")

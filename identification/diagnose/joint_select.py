@@ -28,6 +28,7 @@ import numpy as np
 from ..workers import one_blas_thread
 from .joint_evidence import check_tractor, final_evidence, local_gain
 from .joint_fit import TractorFit, fit_tractor, sse_of, unexplained
+from .wording import effects_sentence
 from .joint_start import (ENVELOPE_GUESS_M, body_start, enveloped_timings, periodic_start, refine_timing,
                           rescue_start, starting_values)
 from .joint_signs import settle_signs
@@ -147,6 +148,7 @@ class TractorDiagnosis:
                         "noise_nrmse": self.noise_nrmse(t), "unexplained": self.unexplained[t],
                         **({"free_decay_check": check} if check else {})}
         return {"recording": rec.source, "effects": list(self.effects),
+                "summary": effects_sentence({"effects": list(self.effects), "tires": tires}),
                 "body": {"pitch_index": value("pitch_index"), "roll_index": value("roll_index"),
                          "front_axle": "pivot" if "front_axle_pivot" in self.effects else "rigid",
                          "pivot_index": value("pivot_index"),
@@ -172,8 +174,10 @@ class TractorDiagnosis:
         """One tire in the per-tire ``diagnose --tire`` shape, from the joint fit."""
         doc = self.to_json(nrmse_before=nrmse_before, nrmse_after=nrmse_after)
         t = doc["tires"][tire]
-        return {"tire": tire, "effects": doc["effects"], "nrmse_before": t["nrmse_before"],
-                "nrmse_after": t["nrmse_after"], "k": t["k"], "c": t["c"], "k_ci": t["k_ci"], "c_ci": t["c_ci"],
+        return {"tire": tire, "effects": doc["effects"],
+                "summary": effects_sentence({"effects": doc["effects"], "tires": {tire: t}}),
+                "nrmse_before": t["nrmse_before"], "nrmse_after": t["nrmse_after"], "noise_nrmse": t["noise_nrmse"],
+                "unexplained": t["unexplained"], "k": t["k"], "c": t["c"], "k_ci": t["k_ci"], "c_ci": t["c_ci"],
                 "parameters": t["parameters"], "evidence": doc["evidence"]}
 
 
