@@ -25,6 +25,9 @@ def test_none_alone_only_where_every_channel_is_at_its_noise_floor():
     text = effects_sentence(_doc([], {"FL": 0.97, "FR": None, "RL": 0.42}))
     assert text.startswith("none named, yet the four-corner model leaves FL, RL above the noise floor")
     assert "up to 97 % of a channel's signal energy" in text
+    assert "up to 100 % of" in effects_sentence(_doc([], {"FL": 0.99995}))     # never "1e+02 %"
+    assert "up to 326 % of" in effects_sentence(_doc([], {"FL": 3.26}))        # a model worse than none
+    assert "up to 6.8 % of" in effects_sentence(_doc([], {"FL": 0.068}))
     text = effects_sentence(_doc(["enveloping", "lift_off"], {"FL": None, "RR": 0.35}))
     assert text == ("enveloping, lift_off; the extended model still leaves RR above the noise floor (up to 35 % "
                     "of a channel's signal energy left)")

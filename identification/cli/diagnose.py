@@ -11,7 +11,7 @@ from .util import (add_example_option, announce_compilation, check_folder, check
                        read_recording_arg, write_files)
 from ..errors import InputError
 from ..diagnose.joint_evidence import interval_text
-from ..diagnose.wording import line_sentence
+from ..diagnose.wording import line_sentence, percent
 from ..diagnose.run import diagnosis_warnings, run_tractor_diagnosis
 from .._files import json_text, temp_prefix
 
@@ -92,7 +92,7 @@ def _tractor_text(diag, gain, verbose: bool = False) -> str:
     for tire, t in doc["tires"].items():
         left = t["unexplained"]
         flag = (f"above the noise floor: residual {left['residual_to_noise']:.1f}x the noise, "
-                f"{100 * left['share']:.2g} % of the signal energy left, in {left['window'][0]:.3f}-"
+                f"{percent(left['share'])} % of the signal energy left, in {left['window'][0]:.3f}-"
                 f"{left['window'][1]:.3f} s" if left else "residual at the noise floor")
         if left and left.get("steady_line"):
             flag += "; " + line_sentence(left["steady_line"])

@@ -6,12 +6,18 @@ light to import: the report imports them without the fit's numerical code.
 
 from __future__ import annotations
 
-__all__ = ["effects_sentence", "line_sentence"]
+__all__ = ["effects_sentence", "line_sentence", "percent"]
+
+
+def percent(share: float) -> str:
+    """A share as a percentage, two significant digits below 10 %, whole numbers above (never ``1e+02``)."""
+    value = 100 * share
+    return f"{value:.2g}" if abs(value) < 10 else f"{value:.0f}"
 
 
 def line_sentence(line: dict) -> str:
     """The words for a steady line in a residual (:func:`~identification.diagnose.joint_fit.residual_line`'s dict)."""
-    return (f"{100 * line['share_of_residual']:.2g} % of that residual is a steady {line['frequency_hz']:.2f} Hz "
+    return (f"{percent(line['share_of_residual'])} % of that residual is a steady {line['frequency_hz']:.2f} Hz "
             f"line of {line['amplitude_m_s2']:.2g} m/s² (there before the impact too), which the model does not "
             f"explain: an engine line whose orders the sensor's filter or sampling hides, or lugs")
 
@@ -37,7 +43,7 @@ def effects_sentence(doc: dict) -> str:
         return ", ".join(effects) if effects else \
             "none: the four-corner model explains every channel to within its noise"
     worst = max(float(v.get("share") or 0.0) for v in left.values())
-    where = (f"{', '.join(left)} above the noise floor (up to {100 * worst:.2g} % of a channel's signal "
+    where = (f"{', '.join(left)} above the noise floor (up to {percent(worst)} % of a channel's signal "
              f"energy left)")
     if effects:
         return f"{', '.join(effects)}; the extended model still leaves {where}"
