@@ -203,6 +203,7 @@ def fake_diagnosis(monkeypatch):
     """``diagnose`` with a stand-in diagnosis writing four FMU files (the command line around it is real)."""
     from identification.report import plots
     from identification.cli import diagnose as command
+    from identification.diagnose.wording import effects_sentence
 
     calls = []
 
@@ -215,9 +216,10 @@ def fake_diagnosis(monkeypatch):
                 paths[-1].write_bytes(tire.encode())
         if cutoff_hz == 33.0:
             raise InputError(rec.source, "no fit (stand-in)")
-        doc = {"body": {"pitch_index": None, "roll_index": None, "front_axle": "rigid",
-                        "speed_m_s": {"sidecar": 7 / 3.6, "from_delay": None}},
+        doc = {"effects": [], "body": {"pitch_index": None, "roll_index": None, "front_axle": "rigid",
+                                       "speed_m_s": {"sidecar": 7 / 3.6, "from_delay": None}},
                "tires": {}, "intervals": "stand-in"}
+        doc["summary"] = effects_sentence(doc)      # as the diagnosis' JSON carries it
         diag = SimpleNamespace(problem=SimpleNamespace(rec=rec), effects=[], extra={}, evidence={}, seconds=4.25,
                                to_json=lambda **kw: doc, tire_json=lambda tire, **kw: {"tire": tire})
         gain = SimpleNamespace(nrmse_before={}, nrmse_after={}, agreement=1e-9, fmu_paths=paths, seconds=1.5,
