@@ -120,9 +120,7 @@ def undo_at_forced_exit() -> None:
             block.remove()
         except BaseException:
             pass
-    for name in list(_OPEN_TEMPORARIES):
-        _unlink_quietly(name)
-    _OPEN_TEMPORARIES.clear()
+    remove_open_temporaries()
 
 
 def remove_open_temporaries() -> list[str]:
