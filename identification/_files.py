@@ -121,6 +121,26 @@ def undo_at_forced_exit() -> None:
         except BaseException:
             pass
     remove_open_temporaries()
+    if _TEMP_FOLDERS_BEFORE is not None:
+        try:
+            folder, before = _TEMP_FOLDERS_BEFORE
+            remove_temp_folders(own_temp_folders(folder) - before)
+        except BaseException:
+            pass
+
+
+#: The temporary directory and this process's temporary folders in it as its command started
+#: (:func:`note_temp_folders`): those made since are the command's, removed as it ends, even by a forced
+#: exit (while an output set is written the temporary directory is inside it, and goes with it).
+_TEMP_FOLDERS_BEFORE = None
+
+
+def note_temp_folders() -> set:
+    """Note (and return) this process's temporary folders as a command starts (:data:`_TEMP_FOLDERS_BEFORE`)."""
+    global _TEMP_FOLDERS_BEFORE
+    before = own_temp_folders()
+    _TEMP_FOLDERS_BEFORE = (tempfile.gettempdir(), before)
+    return before
 
 
 def remove_open_temporaries() -> list[str]:
@@ -135,11 +155,12 @@ def remove_open_temporaries() -> list[str]:
     return removed
 
 
-def own_temp_folders() -> set:
-    """This process's temporary folders (:func:`temp_prefix`) in the temporary directory now."""
+def own_temp_folders(folder=None) -> set:
+    """This process's temporary folders (:func:`temp_prefix`) in `folder` (default: the temporary directory
+    now)."""
     import re
 
-    folder = tempfile.gettempdir()
+    folder = tempfile.gettempdir() if folder is None else folder
     pattern = re.compile(rf"cleatfmu_[a-z0-9]+_{os.getpid()}-.*")
     try:
         return {entry.path for entry in os.scandir(folder) if pattern.fullmatch(entry.name)

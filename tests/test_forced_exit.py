@@ -22,7 +22,7 @@ _CHILD = textwrap.dedent("""
     from identification._folders import FolderSet
 
     root = Path(sys.argv[1])
-    sg.TERMINATE_GRACE_S = 0.5
+    sg.GRACE_S = 0.5
 
     def stubborn(argv):
         with OutputFolders():

@@ -244,11 +244,14 @@ def _main(argv=None) -> int:
         print("cleatfmu: error: stdout: closed (the result would be lost); redirect it to a file or a pipe",
               file=sys.stderr)
         return 2
-    signals._signalled, signals._ended = 0, False
+    signals._signalled, signals._ended, signals._command_pid = 0, False, os.getpid()
+    signals._watch_the_command()
     _escape_unprintable_output()
     signals._hold_signals_while_forking()
     previous = None
-    folders = _files.own_temp_folders()     # (its own, made before this command: a notebook's, a test's)
+    folders = _files.note_temp_folders()    # (its own, made before this command: a notebook's, a test's)
+    unraisable = sys.unraisablehook
+    sys.unraisablehook = _quiet_after_a_signal(unraisable)
     try:
         previous = signals._previous_sigterm()
         if previous is not None:
@@ -277,6 +280,22 @@ def _main(argv=None) -> int:
         signals._restore_signals(previous)
         _files.remove_open_temporaries()    # a signal between a temporary's creation and its writer's try
         _files.remove_temp_folders(_files.own_temp_folders() - folders)     # and a folder's and its owner's
+        if signals._signalled:
+            import gc
+
+            gc.collect()    # what the signal cut in half is finalized now, while its noise is dropped
+        sys.unraisablehook = unraisable
+
+
+def _quiet_after_a_signal(previous):
+    """An unraisable-exception hook that drops what comes once a signal has stopped the command and passes
+    the rest to `previous`: an object a Ctrl-C cut in half as a library built it (seen: numba's compiler
+    engine, whose finalizer then fails with AttributeError) would print "Exception ignored ... Traceback"
+    after the command's one line."""
+    def hook(unraisable):
+        if not signals._signalled:
+            previous(unraisable)
+    return hook
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -9,8 +9,9 @@ hooks, the import machinery's own frames, finalizers and weak references' callba
 :data:`_DROPPING`), or where a library is importing itself (a compiled module's initialisation that
 prints the exception of an import it makes, and leaves the library half imported: seen with numba), it waits:
 SIGTERM is raised again 20 ms later, Ctrl-C at the next Python call outside that code.  While the process
-forks (its worker pool) both are held.  A SIGTERM the command does not answer within
-:data:`TERMINATE_GRACE_S` ends the process with its output undone (:func:`_force_exit`).
+forks (its worker pool) both are held; a Ctrl-C that waits is also retried every 20 ms, so that a command
+blocked in a wait meanwhile (for its workers' results) is not left waiting.  A signal the command does not
+answer within :data:`GRACE_S` ends the process with its output undone (:func:`_force_exit`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import time
 
 __all__ = ["Terminated", "EXIT_TERMINATED"]
 
@@ -35,25 +37,70 @@ EXIT_TERMINATED = 143
 _signalled = 0
 
 
-#: Seconds a terminated command has to unwind before it is ended where it stands.
-TERMINATE_GRACE_S = 10.0
+#: Seconds an interrupted or terminated command has to unwind before it is ended where it stands.
+GRACE_S = 10.0
 
-#: The timer of :data:`TERMINATE_GRACE_S` (None: no SIGTERM yet); cancelled once the command has ended.
-_grace_timer = None
+#: When the command's first signal came (``time.monotonic()``; None: none yet), for :func:`_watch`.
+_signal_at = None
+
+#: The number of the command under way (a watch of an earlier command in this process ends).
+_command_serial = 0
+
+#: The process that runs the command (a worker forked from it that gets a signal before its own handling
+#: is set up starts no grace of its own).
+_command_pid = None
+
+#: Whether a Ctrl-C waits to be raised (:func:`_raise_at_the_next_safe_call` and its retry on SIGALRM;
+#: whichever raises it first clears this, and the other then raises nothing).
+_interrupt_waiting = False
 
 
 def _force_exit() -> None:
-    """End a terminated run that did not unwind in time (a library that swallowed the exception, or holds a
-    lock the unwinding needs): its output under way is undone first, from this timer's thread
-    (:func:`identification._files.undo_at_forced_exit`)."""
+    """End an interrupted or terminated run that did not unwind in time (a library that swallowed the
+    exception, holds a lock the unwinding needs, or waits where nothing raises): its output under way is
+    undone first, from this timer's thread (:func:`identification._files.undo_at_forced_exit`); exit 130
+    after Ctrl-C, 143 after SIGTERM."""
+    status = EXIT_TERMINATED if _signalled != 130 else 130
     try:
         files = sys.modules.get("identification._files")
         if files is not None:
             files.undo_at_forced_exit()
-        sys.stderr.write("cleatfmu: terminated\n")
+        sys.stderr.write("cleatfmu: " + ("interrupted" if status == 130 else "terminated") + "\n")
         sys.stderr.flush()
     finally:
-        os._exit(EXIT_TERMINATED)
+        os._exit(status)
+
+
+def _watch_the_command() -> None:
+    """Watch the command that starts now in a thread of its own (:func:`_watch`), which ends with it.
+
+    Started beforehand rather than from a signal's handler: a thread started there would wait forever for
+    the lock of the threads' table if the signal came as the command started a thread of its own."""
+    global _command_serial, _signal_at
+    import threading
+
+    _command_serial += 1
+    _signal_at = None
+    threading.Thread(target=_watch, args=(_command_serial,), name="cleatfmu-grace", daemon=True).start()
+
+
+def _watch(serial: int) -> None:
+    """End the command `serial` where it stands (:func:`_force_exit`) once :data:`GRACE_S` have passed since
+    its first signal without its end; return when it has ended."""
+    while serial == _command_serial and not _ended:
+        at = _signal_at
+        if at is not None and time.monotonic() - at > GRACE_S:
+            _force_exit()
+        time.sleep(0.05)
+
+
+def _start_the_grace() -> None:
+    """The command's first signal: from now it has :data:`GRACE_S` to unwind (:func:`_watch`).  Lock-free
+    (a handler); a worker forked from the command that gets a signal before its own handling is set up
+    changes nothing."""
+    global _signal_at
+    if _signal_at is None and os.getpid() == _command_pid:
+        _signal_at = time.monotonic()
 
 
 #: Standard-library code where an exception raised by a signal handler is ignored ("Exception ignored in")
@@ -127,50 +174,68 @@ def _raise_now_or_soon(code: int, frame) -> None:
     "Exception ignored" and dropped, or leaves a lock held) arm a retry 20 ms later instead
     (:func:`_raise_pending`, on SIGALRM)."""
     if _in_the_standard_library(frame):
-        if signal.getsignal(signal.SIGALRM) is not _raise_pending:
-            signal.signal(signal.SIGALRM, _raise_pending)
-        signal.setitimer(signal.ITIMER_REAL, 0.02)
+        _retry_soon()
         return
+    if code != EXIT_TERMINATED:
+        _stop_waiting()
     raise Terminated() if code == EXIT_TERMINATED else KeyboardInterrupt
+
+
+def _retry_soon() -> None:
+    """Arm the retry of a waiting signal 20 ms from now (:func:`_raise_pending`, on SIGALRM)."""
+    if signal.getsignal(signal.SIGALRM) is not _raise_pending:
+        signal.signal(signal.SIGALRM, _raise_pending)
+    signal.setitimer(signal.ITIMER_REAL, 0.02)
 
 
 def _raise_pending(signum, frame):
     """SIGALRM: the retry of a signal that came in fragile code (:func:`_raise_now_or_soon`); nothing once the
-    command has ended (:data:`_ended`)."""
-    if _signalled and not _ended:
-        _raise_now_or_soon(_signalled, frame)
+    command has ended (:data:`_ended`), nor for a waiting Ctrl-C raised meanwhile at a call."""
+    if not _signalled or _ended or (_signalled == 130 and not _interrupt_waiting):
+        return
+    _raise_now_or_soon(_signalled, frame)
+
+
+def _stop_waiting() -> None:
+    """A waiting Ctrl-C is being raised: its other way of being raised is dropped (the profile hook of
+    :func:`_raise_at_the_next_safe_call`; a retry still armed then finds nothing to do)."""
+    global _interrupt_waiting
+    _interrupt_waiting = False
+    hook = sys.getprofile()
+    if hook is not None and getattr(hook, "__qualname__", "").startswith("_raise_at_the_next_safe_call"):
+        sys.setprofile(None)
 
 
 def _raise_terminated(signum, frame):
     """SIGTERM: raise :class:`Terminated` where the command is (or soon, :func:`_raise_now_or_soon`); after
-    :data:`TERMINATE_GRACE_S` end the run where it stands.  Once the command has ended (:data:`_ended`) a
+    :data:`GRACE_S` end the run where it stands.  Once the command has ended (:data:`_ended`) a
     SIGTERM is only remembered."""
-    global _signalled, _grace_timer
+    global _signalled
     if _ended:
         _signalled = _signalled or EXIT_TERMINATED
         return
-    if _grace_timer is None:
-        import threading
-
-        _grace_timer = threading.Timer(TERMINATE_GRACE_S, _force_exit)
-        _grace_timer.daemon = True
-        _grace_timer.start()
+    _start_the_grace()
     _signalled = EXIT_TERMINATED
     _raise_now_or_soon(EXIT_TERMINATED, frame)
 
 
 def _raise_interrupt(signum, frame):
     """Ctrl-C: raise KeyboardInterrupt where the command is, or, in fragile standard-library code (an import
-    lock's callback drops it), at the next call outside it (:func:`_raise_at_the_next_safe_call`); once the
-    command has ended (:data:`_ended`), only remember it."""
-    global _signalled
+    lock's callback drops it), at the next call outside it (:func:`_raise_at_the_next_safe_call`) or, where
+    no call comes (the command blocked in a wait), at a retry 20 ms later outside it; after :data:`GRACE_S`
+    end the run where it stands.  Once the command has ended (:data:`_ended`), only remember it."""
+    global _signalled, _interrupt_waiting
     if _ended:
         _signalled = _signalled or 130
         return
+    _start_the_grace()
     _signalled = 130
     if _in_the_standard_library(frame):
+        _interrupt_waiting = True
+        _retry_soon()                           # (first: the hook would take its calls for the command's)
         _raise_at_the_next_safe_call(frame)
         return
+    _stop_waiting()
     raise KeyboardInterrupt
 
 
@@ -195,7 +260,8 @@ def _raise_at_the_next_safe_call(frame=None) -> None:
         if event in ("call", "return") and frame.f_code not in own and frame.f_code is not hook.__code__ \
                 and not _in_the_standard_library(frame):
             sys.setprofile(None)
-            if not _ended:
+            if not _ended and _interrupt_waiting:
+                _stop_waiting()
                 raise KeyboardInterrupt
     sys.setprofile(hook)
 
@@ -221,17 +287,12 @@ def _previous_sigterm():
 
 
 def _restore_signals(previous) -> None:
-    """End the command's handling of signals: mark it ended (:data:`_ended`), cancel a pending retry of a
-    signal and the grace timer, and give SIGTERM its `previous` handler back (Ctrl-C keeps raising nothing: the run is about to
-    end with its status)."""
-    global _ended, _grace_timer
+    """End the command's handling of signals: mark it ended (:data:`_ended`; its watch, :func:`_watch`,
+    ends), drop a waiting Ctrl-C and a pending retry of a signal, and give SIGTERM its `previous` handler
+    back (Ctrl-C keeps raising nothing: the run is about to end with its status)."""
+    global _ended
     _ended = True
-    if sys.getprofile() is not None and getattr(sys.getprofile(), "__qualname__", "").startswith(
-            "_raise_at_the_next_safe_call"):
-        sys.setprofile(None)
-    if _grace_timer is not None:
-        _grace_timer.cancel()
-        _grace_timer = None
+    _stop_waiting()
     if previous is None:
         return
     signal.setitimer(signal.ITIMER_REAL, 0)
