@@ -160,3 +160,19 @@ def test_simulate_names_the_file_when_a_summary_does_not_hold_the_recording(cli,
     res = cli("simulate", folder, "--example", "7kmh", "--body", tmp_path / "summary.json")
     assert res.code == 2 and res.err.count("\n") == 1
     assert re.match(rf"cleatfmu: error: {re.escape(str(tmp_path / 'summary.json'))}: a report summary of 2 ", res.err)
+
+
+def test_the_verdict_line_of_a_recording_says_what_its_diagnosis_left_unexplained():
+    """A recording whose diagnosis named nothing while a channel stays far above the noise: its line in the
+    verdict said "effects named: none"; it now carries the diagnosis' words (``summary``)."""
+    from identification.diagnose.wording import effects_sentence
+
+    left = {"share": 0.97, "window": [0.5, 1.2], "residual_to_noise": 30.0}
+    doc = _diagnosis(unexplained=left)
+    doc["effects"] = []
+    doc["summary"] = effects_sentence(doc)
+    html = _verdict(_result(doc))
+    line = html[html.index("<li>run"):]
+    line = line[:line.index("</li>")]
+    assert "none named, yet the four-corner model leaves FL, FR, RL, RR above the noise floor" in line
+    assert "up to 97 %" in line and "effects named: <b>none</b>" not in line

@@ -157,7 +157,7 @@ def plot_diagnosis(diag, *, nrmse_before=None, nrmse_after=None, title: str | No
     fig, (ax, ax_r) = figure(2, 1, size=(10.0, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.4]})
     before = diag.baseline.nrmse if nrmse_before is None else nrmse_before
     after = diag.final.nrmse if nrmse_after is None else nrmse_after
-    label = " + ".join(diag.effects) or "none"
+    label = " + ".join(diag.effects) or "no effect named"
     ax.plot(t[w], pb.measured[w], color="C0", lw=1.0, label="measured (low-pass)")
     ax.plot(t[w], diag.baseline.prediction[w], color="C7", lw=0.9, ls="--",
             label=f"point contact, NRMSE {before:.1%}")
@@ -185,7 +185,7 @@ def plot_tractor_diagnosis(diag, *, nrmse_before=None, nrmse_after=None):
     fig, axes = figure(n, 1, size=(10.0, 2.3 * n + 0.8), sharex=True, squeeze=False)
     before = nrmse_before or diag.baseline.nrmse
     after = nrmse_after or diag.final.nrmse
-    label = " + ".join(diag.effects) or "none"
+    label = " + ".join(diag.effects) or "no effect named"
     for ax, ch in zip(axes[:, 0], pb.channels):
         ax.plot(t[w], pb.measured[ch][w], color="C0", lw=1.0, label=f"{ch} measured (low-pass)")
         ax.plot(t[w], diag.baseline.prediction[ch][w], color="C7", lw=0.8, ls="--",

@@ -99,8 +99,8 @@ def verdict_section(result, tables: dict) -> str:
     for r in result.recordings:
         d = r.diagnosis.diagnosis if r.diagnosis is not None else None
         head = f'{_e(r.stem)} ({r.speed_kmh:.3g} km/h): ' if r.ok else f'{_e(r.stem)}: '
-        head += ("effects named: <b>" + _e(", ".join(d["effects"]) or "none") + "</b>") if d is not None else \
-            '<span class="bad">no verdict</span>'
+        head += ("effects the four-corner model misses: <b>" + _e(d.get("summary") or ", ".join(d["effects"]) or "none")
+                 + "</b>") if d is not None else '<span class="bad">no verdict</span>'
         items.append(f"<li>{head}" + "".join(f'<br><span class="warn">warning: {_e(w)}</span>'
                                              for w in warned[r.stem]) + "</li>")
     return ('<section id="recommended"><h2>Verdict: recommended stiffness and damping</h2>'
