@@ -29,7 +29,8 @@ pytestmark = [pytest.mark.skipif(not sys.platform.startswith("linux"), reason="r
 def kill_over(command: list, out: Path, whole_s: float, n: int, tmpdir: Path, is_new) -> dict:
     """Run `command` (which rewrites the files of folder `out`) n times per signal, each stopped at a random
     time in (0.05, whole_s); `is_new(out)` says whether `out` holds the complete new files.  Returns the count
-    per outcome."""
+    per outcome.  A run that ended before its signal shortens the window to that time (`whole_s` measured
+    while the machine was busier: seen, 39 of 60 runs ended before their signal)."""
     rng = random.Random(f"{SEED} {command[0]}")
     before = tree(out)
     outcomes: dict = {}
@@ -53,6 +54,8 @@ def kill_over(command: list, out: Path, whole_s: float, n: int, tmpdir: Path, is
                 (out / name).write_bytes(_saved[out][name])
         else:
             outcome = "earlier"
+        if code == 0:
+            whole_s = max(0.1, min(whole_s, after_s))
         check_exit(where, sig, code, stderr)
         killed = check_beside(out, sig, proc, killed, (where, code, stdout[-300:], stderr[-1500:]))
         assert list(tmpdir.iterdir()) == [], (where, sorted(p.name for p in tmpdir.iterdir()))
