@@ -8,76 +8,18 @@ Now:
 
 * a Ctrl-C that waits is retried every 20 ms, so a command blocked in a wait is interrupted;
 * a command that has not ended :data:`~identification.cli.signals.GRACE_S` after its first signal (a library
-  that swallows the exception) is ended with its output undone, its temporary folders removed, exit 130;
+  that swallows the exception) is ended with its output undone, exit 130
+  (``tests/test_forced_exit.py``, with SIGTERM's 143);
 * finalizers that fail after a signal print nothing (the command's one line stays the last).
 """
 
-import signal
 import subprocess
 import sys
 import textwrap
-import time
 
 import pytest
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals")
-
-_SWALLOWING = textwrap.dedent("""
-    import sys, tempfile, time, threading
-    sys.argv[0] = "-m"              # as ``python -m identification.cli``: the program's own signal handling
-    from pathlib import Path
-    from identification.cli import command_line as cl, signals as sg
-    from identification._files import OutputFolders, atomic_write_bytes, temp_prefix
-    from identification._folders import FolderSet
-
-    root = Path(sys.argv[1])
-    sg.GRACE_S = 0.5
-
-    def stubborn(argv):
-        with OutputFolders():
-            atomic_write_bytes({root / "params.json": b"new"})
-            tempfile.mkdtemp(prefix=temp_prefix("build"))
-            with FolderSet(root / "out") as new:
-                (new / "report.html").write_text("new")
-                print("ready", flush=True)
-                try:                        # a library that swallows every exception, KeyboardInterrupt too
-                    time.sleep(60)
-                except BaseException:
-                    print("swallowed", flush=True)
-                threading.Event().wait(60)  # then waits where nothing raises
-
-    cl._run = stubborn
-    sys.exit(cl.main([]))
-""")
-
-
-def test_ctrl_c_a_library_swallows_ends_the_run_after_its_grace_with_its_output_undone(tmp_path):
-    (tmp_path / "params.json").write_bytes(b"old")
-    (tmp_path / "out").mkdir()
-    (tmp_path / "out" / "report.html").write_text("old")
-    tmpdir = tmp_path / "tmp"
-    tmpdir.mkdir()
-    root = tmp_path / "root"
-    root.mkdir()
-    for name in ("params.json", "out"):
-        (tmp_path / name).rename(root / name)
-    proc = subprocess.Popen([sys.executable, "-c", _SWALLOWING, str(root)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env={"TMPDIR": str(tmpdir), "PATH": "/usr/bin:/bin"})
-    assert proc.stdout.readline() == "ready\n"
-    assert len(list(tmpdir.iterdir())) == 1             # its temporary folder, under way
-    time.sleep(0.3)
-    t0 = time.monotonic()
-    proc.send_signal(signal.SIGINT)
-    stdout, stderr = proc.communicate(timeout=30)
-    assert stdout == "swallowed\n"
-    assert proc.returncode == 130, stderr
-    assert time.monotonic() - t0 < 10.0
-    assert stderr.strip().splitlines() == ["cleatfmu: interrupted"], stderr
-    assert sorted(p.name for p in root.iterdir()) == ["out", "params.json"]
-    assert (root / "params.json").read_bytes() == b"old"
-    assert (root / "out" / "report.html").read_text() == "old"
-    assert list(tmpdir.iterdir()) == []
-
 
 _BLOCKED = textwrap.dedent("""
     import sys, threading, time, types

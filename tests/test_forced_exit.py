@@ -1,6 +1,7 @@
-"""A terminated run that does not unwind (a library swallows the exception) is ended after its grace time
-with its output under way undone: the previous folder set back, the new set and the lock gone, a file it
-had replaced restored, its temporaries removed; exit 143 with one line.  Also: a SIGTERM in the first
+"""An interrupted or terminated run that does not unwind (a library swallows the exception) is ended after
+its grace time with its output under way undone: the previous folder set back, the new set and the lock
+gone, a file it had replaced restored, its temporaries and temporary folders removed; exit 130 or 143 with
+one line.  Also: a SIGTERM in the first
 instants of the command, and one after its end, never end in a traceback."""
 
 import os
@@ -15,10 +16,11 @@ import pytest
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals")
 
 _CHILD = textwrap.dedent("""
-    import sys, time
+    import sys, tempfile, threading, time
+    sys.argv[0] = "-m"              # as ``python -m identification.cli``: the program's own signal handling
     from pathlib import Path
     from identification.cli import command_line as cl, signals as sg
-    from identification._files import OutputFolders, atomic_write_bytes, temp_beside
+    from identification._files import OutputFolders, atomic_write_bytes, temp_beside, temp_prefix
     from identification._folders import FolderSet
 
     root = Path(sys.argv[1])
@@ -27,41 +29,50 @@ _CHILD = textwrap.dedent("""
     def stubborn(argv):
         with OutputFolders():
             atomic_write_bytes({root / "params.json": b"new"})
+            tempfile.mkdtemp(prefix=temp_prefix("build"))
             with FolderSet(root / "out") as new:
                 (new / "report.html").write_text("new")
                 temp_beside(root / "tire.fmu", ".part")
                 print("ready", flush=True)
-                try:                        # a library that swallows every exception, Terminated too
+                try:                        # a library that swallows every exception, ours too
                     time.sleep(60)
                 except BaseException:
                     print("swallowed", flush=True)
-                time.sleep(60)
+                threading.Event().wait(60)  # then waits where nothing raises
 
     cl._run = stubborn
     sys.exit(cl.main([]))
 """)
 
 
-def test_a_run_that_swallows_sigterm_is_ended_with_its_output_undone(tmp_path):
-    (tmp_path / "params.json").write_bytes(b"old")
-    (tmp_path / "out").mkdir()
-    (tmp_path / "out" / "report.html").write_text("old")
-    proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(tmp_path)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+@pytest.mark.parametrize("sig, status, line", [(signal.SIGTERM, 143, "cleatfmu: terminated"),
+                                               (signal.SIGINT, 130, "cleatfmu: interrupted")])
+def test_a_run_that_swallows_the_signal_is_ended_with_its_output_undone(tmp_path, sig, status, line):
+    """Ctrl-C had no grace before (CI: a demo given Ctrl-C did not end within 60 s and printed nothing)."""
+    root, tmpdir = tmp_path / "root", tmp_path / "tmp"
+    root.mkdir()
+    tmpdir.mkdir()
+    (root / "params.json").write_bytes(b"old")
+    (root / "out").mkdir()
+    (root / "out" / "report.html").write_text("old")
+    proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(root)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=dict(os.environ, TMPDIR=str(tmpdir)))
     assert proc.stdout.readline() == "ready\n"
-    assert any(p.name.startswith("out.cleatfmu-new-") for p in tmp_path.iterdir())     # under way
+    assert any(p.name.startswith("out.cleatfmu-new-") for p in root.iterdir())     # under way
+    assert len(list(tmpdir.iterdir())) == 1                                       # its temporary folder
     time.sleep(0.3)                 # into its sleep (a signal before it would unwind the run as usual)
     t0 = time.monotonic()
-    proc.send_signal(signal.SIGTERM)
+    proc.send_signal(sig)
     stdout, stderr = proc.communicate(timeout=30)
     assert stdout == "swallowed\n"
-    assert proc.returncode == 143, stderr
+    assert proc.returncode == status, stderr
     assert time.monotonic() - t0 < 10.0
-    assert stderr.strip().splitlines() == ["cleatfmu: terminated"], stderr
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "params.json"]
-    assert (tmp_path / "params.json").read_bytes() == b"old"
-    assert [p.name for p in (tmp_path / "out").iterdir()] == ["report.html"]
-    assert (tmp_path / "out" / "report.html").read_text() == "old"
+    assert stderr.strip().splitlines() == [line], stderr
+    assert sorted(p.name for p in root.iterdir()) == ["out", "params.json"]
+    assert (root / "params.json").read_bytes() == b"old"
+    assert [p.name for p in (root / "out").iterdir()] == ["report.html"]
+    assert (root / "out" / "report.html").read_text() == "old"
+    assert list(tmpdir.iterdir()) == []
 
 
 _EDGES = textwrap.dedent("""
