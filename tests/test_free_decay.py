@@ -209,3 +209,49 @@ def test_a_named_steady_line_is_taken_out_of_the_channel_before_its_free_decay_i
     except InputError:          # (a line half the impact's peak: no decaying oscillation found at all)
         return
     assert abs(raw.k / clean.k - 1) > 3e-3 or abs(raw.c / clean.c - 1) > 3e-2
+
+
+@pytest.fixture(scope="module")
+def rigid():
+    """The rig's rigid tractor (its ``axle_coupling``), diagnosed with the rigid body named."""
+    run = run_rig(("axle_coupling",), {"duration_s": 4.0, "speed_kmh": 10.0}, seed=8)
+    pb = TractorProblem.from_recording(run.recording)
+    start = starting_values(pb)
+    model = TractorFitModel(("axle_coupling", "roll_coupling"), pb)
+    theta = {n: start.get(n, {"pitch_index": 0.9, "roll_index": 0.6}.get(n)) for n in model.names}
+    fit = fit_tractor(model, theta, budget=300)
+    diag = dataclasses.replace(_diagnosis(pb, start, fit, fit), effects=["axle_coupling", "roll_coupling"])
+    return run, pb, start, fit, diag
+
+
+def test_a_named_rigid_body_is_checked_against_its_own_free_decay(rigid):
+    """Under the rigid body a channel's own decay is the body's mode: the body's free decay over the tail
+    (all four channels, :mod:`identification.diagnose.body_decay`) is the check, and it holds the rig's truth;
+    a joint k outside its interval is replaced by the decay's, the interval stretched to hold both."""
+    run, pb, start, fit, diag = rigid
+    check = free_decay_check(diag)
+    truth = run.truth["tires"]
+    for t in pb.channels:
+        assert check[t]["valid"] and check[t]["body_decay"], check[t]
+        assert check[t]["k"] == pytest.approx(truth[t]["k"], rel=0.02)
+        assert check[t]["k_ci"][0] <= truth[t]["k"] <= check[t]["k_ci"][1]
+    k = fit.params["k_RL"] * 1.3
+    moved = dataclasses.replace(fit, params={**fit.params, "k_RL": k}, ci={**fit.ci, "k_RL": (0.99 * k, 1.01 * k)})
+    diag2 = dataclasses.replace(diag, final=moved)
+    diag2.extra["free_decay"] = check2 = free_decay_check(diag2)
+    assert check2["RL"]["prefer"] and "rigid tractor's free decay" in check2["RL"]["reason"]
+    rl = diag2.to_json()["tires"]["RL"]
+    assert rl["k_source"] == "free_decay" and rl["k"] == pytest.approx(check2["RL"]["k"])
+    assert rl["k_ci"][0] <= truth["RL"]["k"] <= rl["k_ci"][1] and rl["k_ci"][1] >= 1.01 * k   # holds both
+
+
+def test_a_body_decay_that_does_not_count_says_why(rigid, monkeypatch):
+    """With a bound the decay cannot meet, the check falls back to the channels' fits and says why."""
+    import identification.diagnose.body_decay as bd
+
+    run, pb, start, fit, diag = rigid
+    monkeypatch.setattr(bd, "MAX_RESIDUAL_TO_NOISE", 0.1)
+    check = free_decay_check(diag)
+    assert all(not check[t]["valid"] and not check[t].get("body_decay") for t in pb.channels)
+    assert all("the body's free decay leaves" in check[t]["why_not"] for t in pb.channels
+               if "why_not" in check[t] and check[t]["why_not"] and "waveform" not in check[t]["why_not"])

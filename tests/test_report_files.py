@@ -85,12 +85,13 @@ def test_the_verdict_shows_every_warning_beside_it_and_is_not_green_over_them(de
     html = (out / "report.html").read_text()
     verdict = html[html.index('<section id="recommended">'):html.index('<nav class="toc">')]
     warnings = [w for r in summary["recordings"] for w in r["diagnosis"]["warnings"]]
-    assert warnings        # the test day's diagnosis warns (the free decay is no check under a coupled body)
+    # (the test day's rigid tractor is checked against its own free decay, which agrees with the joint fit: it
+    # may warn of nothing; tests/test_report_verdict.py checks made-up batches that warn)
     for w in warnings:
         assert f"warning: {w}".replace("'", "&#x27;") in verdict, w
     status = re.search(r"</p>", verdict)
-    assert 'class="ok">Every tire' not in verdict[:status.start()]
-    assert f"warned of {len(warnings)} thing(s)" in verdict
+    assert ('class="ok">Every tire' in verdict[:status.start()]) == (not warnings)
+    assert (f"warned of {len(warnings)} thing(s)" in verdict) == bool(warnings)
 
 
 def test_the_report_slips_are_gone(demo):

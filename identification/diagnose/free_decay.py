@@ -39,6 +39,14 @@ passes 0.5-16 % off where the joint fit was 8-70 % off), or the selection's star
 outside the range searched around it (another mode), else the joint fit's (a channel's own fit would be the
 body's mode).
 Every check entry carries that range (``k_range``, ``c_range``).
+
+Under a coupled body a channel's own decay is the body's mode, not its tire's.  For four channels without a
+named friction or progressive tire, the named body's free decay (:mod:`~identification.diagnose.body_decay`: the
+rigid tractor's modes after the last impact, fitted alone) takes the corner decay's part for every tire
+where the diagnosis names that body and its decay counts (:func:`identification.diagnose.body_decay.why_not`):
+``"body_decay": true``, the same comparison, and
+where the joint fit collapsed or leaves the channel undetermined, the decay's values and intervals alone
+(``"decay_only"``).
 """
 
 from __future__ import annotations
@@ -80,6 +88,13 @@ def free_decay_check(diag) -> dict:
     rec = pb.rec
     out = {}
     named = [e for e in diag.effects if e in BODY_EFFECTS + SHAPE_EFFECTS]
+    body, body_why = _body_free_decay(diag)
+    if body is not None and body_why is None:
+        for tire in pb.channels:
+            out[tire] = _body_entry(diag, tire, body)
+        return out
+    if body_why is not None:
+        named = [f"{', '.join(named)} named and {body_why}"]
     for tire in pb.channels:
         if collapsed(diag, tire):
             out[tire] = _channel_fit_instead(diag, tire)
@@ -93,7 +108,8 @@ def free_decay_check(diag) -> dict:
         fin = diag.final
         entry = {"valid": True, "why_not": None, "k": float(wave.k), "c": float(wave.c),
                  "k_ci": [float(v) for v in wave.k_ci], "c_ci": [float(v) for v in wave.c_ci]}
-        why_not = (f"{', '.join(named)} named: the free decay is not a linear tire's under a corner mass" if named
+        why_not = (named[0] if body_why is not None else
+                   f"{', '.join(named)} named: the free decay is not a linear tire's under a corner mass" if named
                    else None if wave.r2 >= MIN_DECAY_R2 else   # a forced response, a progressive or coupled hub
                    f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < {MIN_DECAY_R2})")
         sentences = _compare(fin, tire, entry, "the free decay's" if why_not is None else
@@ -257,7 +273,7 @@ def reported(value: float, ci, check: dict, q: str) -> tuple[float, list]:
     taken out, a footprint) makes its white-noise interval too narrow); where the
     joint fit collapsed (:func:`collapsed`), the channel's own fit's with the range searched; where the model leaves too much of the channel unexplained (``undetermined``), the
     channel's own fit's (no body named: :func:`_undetermined`) or the joint fit's, with the range searched."""
-    if check.get("collapsed"):
+    if check.get("collapsed") or check.get("decay_only"):
         return float(check[q]), [float(v) for v in check[f"{q}_ci"]]
     if check.get("undetermined"):
         lo, hi = check[f"{q}_range"]
@@ -267,3 +283,51 @@ def reported(value: float, ci, check: dict, q: str) -> tuple[float, list]:
         return float(value), [float(v) for v in ci]
     lo, hi = check[f"{q}_ci"]
     return float(check[q]), [float(min(ci[0], value, lo)), float(max(ci[1], value, hi))]
+
+
+def _body_free_decay(diag):
+    """The rigid tractor's free decay (:mod:`~identification.diagnose.body_decay`) where the diagnosis names it
+    (``axle_coupling`` and ``roll_coupling``, with ``front_axle_pivot`` the pivoting axle's) on four channels
+    without a named friction or progressive tire: (BodyDecay or None, why it is no measurement or None)."""
+    from .body_decay import body_decay, why_not
+
+    pb = diag.problem
+    if len(pb.channels) != 4 or any(e in SHAPE_EFFECTS for e in diag.effects) or \
+            not {"axle_coupling", "roll_coupling"} <= set(diag.effects):
+        return None, None
+    kind = "pivot" if "front_axle_pivot" in diag.effects else "rigid"
+    body = body_decay(pb, kind=kind, start=dict(diag.final.params), final=diag.final)
+    if body is None:
+        return None, None
+    return body, why_not(body)
+
+
+def _body_entry(diag, tire: str, body) -> dict:
+    """A tire's check entry from the body's free decay: compared with the joint fit as a corner's free decay is;
+    where the joint fit collapsed or leaves the channel undetermined, the decay's values and intervals alone."""
+    fin = diag.final
+    entry = {"valid": True, "why_not": None, "body_decay": True,
+             "k": float(body.params[f"k_{tire}"]), "c": float(body.params[f"c_{tire}"]),
+             "k_ci": [float(v) for v in body.ci[f"k_{tire}"]], "c_ci": [float(v) for v in body.ci[f"c_{tire}"]],
+             "window": [float(v) for v in body.window], "residual_to_noise": body.residual_to_noise}
+    whose = (f"the {'pivoting ' if body.kind == 'pivot' else ''}rigid tractor's free decay "
+             f"({body.window[0]:.2f}-{body.window[1]:.2f} s, modes {', '.join(f'{f:.2f}' for f in body.modes_hz)} Hz)")
+    left = diag.unexplained.get(tire)
+    entry.update(_searched(diag, tire))
+    if collapsed(diag, tire) or (left and left["share"] > UNDETERMINED_SHARE):
+        why = ("collapsed" if collapsed(diag, tire) else
+               f"leaves {left['share']:.0%} of this channel unexplained")
+        entry.update(decay_only=True, prefer=True, agree=False, joint_collapsed=collapsed(diag, tire))
+        entry["reason"] = (f"{tire}: the joint fit {why}: k and c are {whose} (k {entry['k'] / 1e3:.1f} kN/m, "
+                           f"c {entry['c'] / 1e3:.3f} kN s/m), with its intervals")
+        return entry
+    sentences = _compare(fin, tire, entry, whose)
+    entry["agree"] = not sentences
+    entry["prefer"] = entry["k_outside_decay"] or entry["c_outside_decay"]
+    entry["prefer_c"] = not entry["prefer"] and left is not None
+    entry["reason"] = None
+    if sentences or entry["prefer"]:
+        entry["reason"] = (f"{tire}: " + (f"the joint fit's {' and '.join(sentences)}; " if sentences else "") +
+                           f"k and c are {whose} (k {entry['k'] / 1e3:.1f} kN/m, c {entry['c'] / 1e3:.3f} kN s/m)"
+                           + (", the interval stretched to hold the joint fit's" if entry["prefer"] else ""))
+    return entry
