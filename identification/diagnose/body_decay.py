@@ -238,17 +238,11 @@ def body_decay(problem, *, kind: str = "rigid", start: dict | None = None, final
         if best is None or sol.cost < best.cost:
             best = sol
     best = optimize.least_squares(fun, best.x, method="lm", max_nfev=60 * (len(names) + 1))
-    x, jac, res = best.x, best.jac, best.fun
+    x, res = best.x, best.fun
     params = dict(zip(names, np.exp(x)))
-    m = len(problem.channels)
-    sizes = [tail.tau.size] * m
     # the initial state's unknowns and the lines', solved linearly
     states = 2 * tail.matrices(params)[0].shape[1] + 2 * len(tail.lines)
-    dof = max(1, res.size - len(names) - states)
-    floor = correlation_lag(tail.rate_hz, problem.cutoff_hz)
-    lag = residual_correlation_lag(res, sizes, floor)
-    cov = sandwich_covariance(jac, res, sizes, lag) * (res.size / dof)
-    q = float(stats.t.ppf(0.975, dof))
+    cov, q, lag = _sandwich(tail, best.jac, res, len(names) + states)
     _, lam = tail.design(params)
     shift = _window_shift(problem, kind, final, fun, x, start_s, end_s, lam)
     ci = {}
@@ -262,9 +256,19 @@ def body_decay(problem, *, kind: str = "rigid", start: dict | None = None, final
     modes = tuple(sorted({round(abs(float(v.imag)) / (2 * math.pi), 3) for v in lam if v.imag > 0}))
     return BodyDecay(kind=kind, params=params, ci=ci, window=(float(start_s), float(end_s)), nrmse=nrmse,
                      residual_to_noise=float(np.sqrt(np.mean(res ** 2))), modes_hz=modes,
-                     extra={"lag": lag, "samples": int(tail.tau.size), "tail": tail, "jac": jac, "residual": res,
-                            "dof": dof, "logs": x, "window_shift": shift,
+                     extra={"lag": lag, "samples": int(tail.tau.size), "window_shift": shift,
                             "scales": amplitude_scales(tail, params)})
+
+
+def _sandwich(tail: _Tail, jac: np.ndarray, res: np.ndarray, unknowns: int):
+    """(covariance, Student's t quantile, lag) of estimates from the tail's residual `res` (all its rows, or
+    the rows of a part of it, channel by channel): the sandwich up to the lag where the residual's
+    autocorrelation has died out (at least the low-passed noise's), scaled to `unknowns` fitted."""
+    sizes = [res.size // len(tail.problem.channels)] * len(tail.problem.channels)
+    lag = residual_correlation_lag(res, sizes, correlation_lag(tail.rate_hz, tail.problem.cutoff_hz))
+    dof = max(1, res.size - unknowns)
+    cov = sandwich_covariance(jac, res, sizes, lag) * (res.size / dof)
+    return cov, float(stats.t.ppf(0.975, dof)), lag
 
 
 def _window_shift(problem, kind, final, fun, x, start_s, end_s, lam) -> np.ndarray:
@@ -293,12 +297,7 @@ def amplitude_scales(tail: _Tail, params: dict) -> dict:
         return tail.residual(params, rows=rows, scale_k=math.exp(x[0]), scale_c=math.exp(x[1]))
 
     sol = optimize.least_squares(fun, np.zeros(2), method="lm", max_nfev=60)
-    sizes = [int(half.sum())] * len(tail.problem.channels)
-    floor = correlation_lag(tail.rate_hz, tail.problem.cutoff_hz)
-    lag = residual_correlation_lag(sol.fun, sizes, floor)
-    dof = max(1, sol.fun.size - 2)
-    cov = sandwich_covariance(sol.jac, sol.fun, sizes, lag) * (sol.fun.size / dof)
-    q = float(stats.t.ppf(0.975, dof))
+    cov, q, _ = _sandwich(tail, sol.jac, sol.fun, 2)
     out = {}
     for i, name in enumerate(("k", "c")):
         h = q * math.sqrt(max(float(cov[i, i]), 0.0))

@@ -93,8 +93,9 @@ def free_decay_check(diag) -> dict:
         for tire in pb.channels:
             out[tire] = _body_entry(diag, tire, body)
         return out
-    if body_why is not None:
-        named = [f"{', '.join(named)} named and {body_why}"]
+    no_check = (f"{', '.join(named)} named and {body_why}" if body_why else
+                f"{', '.join(named)} named: the free decay is not a linear tire's under a corner mass" if named
+                else None)
     for tire in pb.channels:
         if collapsed(diag, tire):
             out[tire] = _channel_fit_instead(diag, tire)
@@ -108,10 +109,9 @@ def free_decay_check(diag) -> dict:
         fin = diag.final
         entry = {"valid": True, "why_not": None, "k": float(wave.k), "c": float(wave.c),
                  "k_ci": [float(v) for v in wave.k_ci], "c_ci": [float(v) for v in wave.c_ci]}
-        why_not = (named[0] if body_why is not None else
-                   f"{', '.join(named)} named: the free decay is not a linear tire's under a corner mass" if named
-                   else None if wave.r2 >= MIN_DECAY_R2 else   # a forced response, a progressive or coupled hub
-                   f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < {MIN_DECAY_R2})")
+        why_not = no_check
+        if why_not is None and wave.r2 < MIN_DECAY_R2:   # a forced response, a progressive or coupled hub
+            why_not = f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < {MIN_DECAY_R2})"
         sentences = _compare(fin, tire, entry, "the free decay's" if why_not is None else
                              "the channel's waveform fit's")
         if why_not is not None:
@@ -122,13 +122,7 @@ def free_decay_check(diag) -> dict:
                                    f"({why_not}); the joint fit's values stand")
             out[tire] = entry
             continue
-        entry["agree"] = not sentences
-        entry["prefer"] = entry["k_outside_decay"] or entry["c_outside_decay"]
-        # a joint model that leaves this channel above its noise floor misses something in the impact, and its
-        # c carries it: the decay's c, which needs the least of the model (its k: the frequency, held by the
-        # whole record, stands)
-        entry["prefer_c"] = not entry["prefer"] and diag.unexplained.get(tire) is not None
-        entry["reason"] = None
+        _judge(diag, tire, entry, sentences)
         if sentences:
             left = diag.unexplained.get(tire)
             where = (f"it leaves {left['share']:.0%} of the signal unexplained in {left['window'][0]:.2f}-"
@@ -232,6 +226,17 @@ def _compare(fin, tire: str, entry: dict, other: str) -> list:
     return sentences
 
 
+def _judge(diag, tire: str, entry: dict, sentences: list) -> None:
+    """A valid decay's verdict on the joint fit: ``agree``; ``prefer`` (the decay's k and c) where the joint k
+    or c lies outside its interval; else ``prefer_c`` where the joint model leaves the channel above its noise
+    floor: it misses something in the impact, and its c carries it (the decay's c needs the least of the
+    model; the frequency, held by the whole record, keeps the joint k)."""
+    entry["agree"] = not sentences
+    entry["prefer"] = entry["k_outside_decay"] or entry["c_outside_decay"]
+    entry["prefer_c"] = not entry["prefer"] and diag.unexplained.get(tire) is not None
+    entry["reason"] = None
+
+
 def collapsed(diag, tire: str) -> bool:
     """Whether the joint fit left the tire's k or c outside the range it searched around its start (the final
     model's bounds)."""
@@ -322,10 +327,7 @@ def _body_entry(diag, tire: str, body) -> dict:
                            f"c {entry['c'] / 1e3:.3f} kN s/m), with its intervals")
         return entry
     sentences = _compare(fin, tire, entry, whose)
-    entry["agree"] = not sentences
-    entry["prefer"] = entry["k_outside_decay"] or entry["c_outside_decay"]
-    entry["prefer_c"] = not entry["prefer"] and left is not None
-    entry["reason"] = None
+    _judge(diag, tire, entry, sentences)
     if sentences or entry["prefer"]:
         entry["reason"] = (f"{tire}: " + (f"the joint fit's {' and '.join(sentences)}; " if sentences else "") +
                            f"k and c are {whose} (k {entry['k'] / 1e3:.1f} kN/m, c {entry['c'] / 1e3:.3f} kN s/m)"
