@@ -176,7 +176,7 @@ def doc_c_source(diag, tire):
 
 def test_a_named_steady_line_is_taken_out_of_the_channel_before_its_free_decay_is_fitted(corners):
     """A 19 Hz line a tenth of the impact's peak, riding on a clean corner's channel (the rig's recording, no lugs): taken out at the fitted
-    lug frequency, the channel is the clean one again to 3 % of the line's amplitude, and the free decay's
+    lug frequency (or, not named, at the quiet stretch's line refined on the record), the channel is the clean one again to 3 % of the line's amplitude, and the free decay's
     k and c are the clean channel's; left in, they are not."""
     import numpy as np
 
@@ -195,14 +195,20 @@ def test_a_named_steady_line_is_taken_out_of_the_channel_before_its_free_decay_i
     cleaned = _without_the_line(lined, "FL", diag)
     assert np.max(np.abs(cleaned.accel_m_s2["FL"] - rec.accel_m_s2["FL"])) < 0.03 * amp     # (the impact projects)
     assert cleaned.accel_m_s2["FR"] is rec.accel_m_s2["FR"]
-    assert _without_the_line(lined, "FL", _diagnosis(pb, start, fit, final)) is lined   # no line named
+    assert _without_the_line(lined, "FL", _diagnosis(pb, start, fit, final)) is lined   # no line named or found
+    # not named, but found in the quiet stretch (a periodogram's peak, 0.3 Hz off): refined on the record, the
+    # same line is taken out
+    found = dataclasses.replace(pb, steady_lines={"FL": {"share": 0.9, "frequency_hz": 19.3, "quiet_rms": amp}})
+    unnamed = _without_the_line(lined, "FL", _diagnosis(found, start, fit, final))
+    assert np.max(np.abs(unnamed.accel_m_s2["FL"] - rec.accel_m_s2["FL"])) < 0.1 * amp   # (the impact pulls f)
 
     def decay(r):
         sig = preprocess(r, ["FL"], cutoff_hz=pb.cutoff_hz, min_peaks=1)["FL"]
         return identify_waveform(sig, r.wheel_load_N["FL"] / STANDARD_GRAVITY)
 
-    clean, fixed = decay(rec), decay(cleaned)
+    clean, fixed, found = decay(rec), decay(cleaned), decay(unnamed)
     assert abs(fixed.k / clean.k - 1) < 1e-3 and abs(fixed.c / clean.c - 1) < 1e-2
+    assert abs(found.k / clean.k - 1) < 1e-3 and abs(found.c / clean.c - 1) < 1e-2, (found.k / clean.k, found.c / clean.c)
     from identification.errors import InputError
     try:
         raw = decay(lined)

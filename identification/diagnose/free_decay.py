@@ -2,8 +2,8 @@
 
 Where a hub rings as an independent corner (the diagnosis names no body coupling) with a linear tire
 (no friction, no progressive stiffness: the decay's shape is then the damped sinusoid, and the fit
-explains its window to R² >= :data:`MIN_DECAY_R2`; a named steady line is taken out of the channel first,
-:func:`_without_the_line`), the waveform fit of its free decay
+explains its window to R² >= :data:`MIN_DECAY_R2`; a steady line, named or found in the quiet stretch, is
+taken out of the channel first, :func:`_without_the_line`), the waveform fit of its free decay
 (:func:`identification.identify.waveform.identify_waveform`) gives k and c from the part of the record that
 needs the least of the model: the tire on flat ground.  The joint fit's k and c
 must agree with it within their joint 95 % interval, √(h_joint² + h_decay²) (h the half-widths, each
@@ -73,8 +73,8 @@ BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
 #: The waveform fit must explain its window to this R² to count as the free decay of a linear corner (below
 #: it: the tire still on the cleat, a progressive tire or a coupled body the diagnosis did not name).
 MIN_DECAY_R2 = ONE_MODE_R2
-#: Named, these make the decay's shape other than a damped sinusoid.  (A named steady line rides on it and
-#: is taken out first: :func:`_without_the_line`.)
+#: Named, these make the decay's shape other than a damped sinusoid.  (A steady line rides on it and is taken
+#: out first: :func:`_without_the_line`.)
 SHAPE_EFFECTS = ("friction_damping", "nonlinear_stiffness")
 
 
@@ -143,15 +143,23 @@ def free_decay_check(diag) -> dict:
 
 
 def _without_the_line(rec, tire: str, diag):
-    """`rec` with the steady line of a named ``periodic_disturbance`` taken out of the tire's channel: the
-    sinusoid at the fitted lug frequency of its axle, least squares over the whole record (the line runs
-    through it, the impact's transient projects little on it), so that the decay is the tire's alone."""
-    if "periodic_disturbance" not in diag.effects:
-        return rec
-    freq = diag.final.params.get(f"lug_frequency_{axle_of(tire)}")
-    if not freq:
-        return rec
+    """`rec` with the steady line taken out of the tire's channel: the sinusoid at the fitted lug frequency of
+    its axle where ``periodic_disturbance`` is named, else at the steady line its quiet stretch holds (an engine
+    line without visible orders, the lugs), refined on the record; least squares over the whole record (the
+    line runs through it, the impact's transient projects little on it), so that the decay is the tire's
+    alone."""
     t, x = rec.time_s, rec.accel_m_s2[tire]
+    freq = diag.final.params.get(f"lug_frequency_{axle_of(tire)}") if "periodic_disturbance" in diag.effects \
+        else None
+    if not freq:
+        line = diag.problem.steady_lines.get(tire)
+        if not line or not line.get("frequency_hz"):
+            return rec
+        from ..recording.condition import refine_line
+        from .joint_fit import LINE_SEARCH_HZ
+
+        f0 = float(line["frequency_hz"])
+        freq = refine_line(t, x[None, :] - x.mean(), f0, min(LINE_SEARCH_HZ, 0.5 * f0))
     w = 2 * math.pi * float(freq)
     basis = np.column_stack([np.sin(w * t), np.cos(w * t), np.ones_like(t)])
     b = np.linalg.lstsq(basis, x, rcond=None)[0]
