@@ -48,6 +48,7 @@ from ..recording.preprocess import DEFAULT_CUTOFF_HZ, TireSignal, preprocess
 from ..recording import Recording
 
 __all__ = ["WaveformResult", "fit_free_decay", "identify_waveform", "long_run_variance_ratio", "decay_misfit",
+           "envelope_ratio",
            "WINDOW_SHIFT_PERIODS", "ONE_MODE_R2", "MAX_SKIPPED_PEAKS"]
 
 #: The window-shift check starts the fit this many damped periods after the free decay's first peak.
@@ -276,6 +277,23 @@ def _window_shift(t, accel, start_s: float, end_s: float, params, mass_kg: float
         return math.nan, math.nan
     sigma, wd = float(later[1][0][0]), abs(float(later[1][0][1]))
     return mass_kg * (wd * wd + sigma * sigma) - k, 2 * mass_kg * sigma - c
+
+
+def envelope_ratio(sig: TireSignal, result: WaveformResult) -> float:
+    """The decay rate over the second half of `result`'s window divided by that over its first half (each
+    half refitted from the whole window's values; NaN where a half cannot be fitted).
+
+    About 1 for a viscous damper, whose decay rate does not depend on the amplitude; above 1 where a
+    friction force F damps the smaller late oscillations harder (its equivalent damping 4 F / (π ω X)
+    grows as the amplitude X falls).
+    """
+    t0, t1 = result.window_s
+    mid = 0.5 * (t0 + t1)
+    seed = np.array([-result.decay_rate, 2 * math.pi / result.T])
+    halves = [_refit_from(sig.time_s, sig.raw_m_s2, a, b, seed) for a, b in ((t0, mid), (mid, t1))]
+    if any(h is None for h in halves):
+        return math.nan
+    return float(halves[1][1][0][0] / halves[0][1][0][0])
 
 
 def decay_misfit(sig: TireSignal, mass_kg: float) -> float | None:
