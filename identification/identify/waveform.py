@@ -283,9 +283,9 @@ def envelope_ratio(sig: TireSignal, result: WaveformResult) -> float:
     """The decay rate over the second half of `result`'s window divided by that over its first half (each
     half refitted from the whole window's values; NaN where a half cannot be fitted).
 
-    About 1 for a viscous damper, whose decay rate does not depend on the amplitude; above 1 where a
-    friction force F damps the smaller late oscillations harder (its equivalent damping 4 F / (π ω X)
-    grows as the amplitude X falls).
+    About 1 for a viscous damper, whose decay rate does not depend on the amplitude; away from 1 where a
+    friction force F acts: its equivalent damping 4 F / (π ω X) grows as the amplitude X falls, and the
+    oscillation stops once the spring no longer overcomes F (a second half one damped mode fits badly).
     """
     t0, t1 = result.window_s
     mid = 0.5 * (t0 + t1)
