@@ -33,11 +33,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize, stats
 
+from ..model.fitting import axle_of
 from ..model.tractor import Body
 from ..recording.condition import refine_line
 from .joint_fit import LINE_SEARCH_HZ, correlation_lag, impact_spans, residual_correlation_lag, sandwich_covariance
 
-__all__ = ["BodyDecay", "body_decay", "tail_window", "MIN_TAIL_S", "TAIL_RATE_HZ"]
+__all__ = ["BodyDecay", "body_decay", "line_frequency", "tail_window", "MIN_TAIL_S", "TAIL_RATE_HZ"]
 
 #: Shortest tail fitted, s.
 MIN_TAIL_S = 0.8
@@ -91,7 +92,7 @@ class _Tail:
         rec = problem.rec
         self.problem, self.kind = problem, kind
         t = rec.time_s
-        lines = {j: f for j, f in enumerate(_line_frequencies(problem, final)) if f}
+        lines = {j: f for j, f in enumerate(line_frequency(problem, c, final)[0] for c in problem.channels) if f}
         rate = max(TAIL_RATE_HZ, 4.0 * max(lines.values(), default=0.0))
         stride = max(1, int(rec.sample_rate_hz // rate))
         idx = np.flatnonzero((t >= start_s) & (t <= end_s))[::stride]
@@ -172,15 +173,14 @@ class _Tail:
         return np.where(np.isfinite(r), r, _FAILED)
 
 
-def _line_frequencies(problem, final=None) -> list:
-    """Per channel, the frequency (Hz) of the steady line running through the record, or None: a named
-    ``periodic_disturbance``'s fitted lug frequency of its axle, else the line of the channel's quiet stretch."""
-    out = []
-    for c in problem.channels:
-        axle = "front" if c[0] == "F" else "rear"
-        f = final.params.get(f"lug_frequency_{axle}") if final is not None else None
-        out.append(float(f) if f else (getattr(problem, "steady_lines", {}).get(c) or {}).get("frequency_hz"))
-    return out
+def line_frequency(problem, tire: str, final=None) -> tuple:
+    """(frequency Hz or None, whether it is fitted) of the steady line running through the tire's channel: a
+    named ``periodic_disturbance``'s fitted lug frequency of its axle in `final`, else the line of the
+    channel's quiet stretch (its periodogram's peak: refine it before use)."""
+    f = final.params.get(f"lug_frequency_{axle_of(tire)}") if final is not None else None
+    if f:
+        return float(f), True
+    return (getattr(problem, "steady_lines", {}).get(tire) or {}).get("frequency_hz"), False
 
 
 def _starts(tail: _Tail, start: dict | None) -> list[dict]:

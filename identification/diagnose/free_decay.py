@@ -58,7 +58,6 @@ import numpy as np
 
 from ..errors import InputError
 from ..recording.preprocess import preprocess
-from ..model.fitting import axle_of
 from ..recording import STANDARD_GRAVITY
 from ..identify.waveform import ONE_MODE_R2, identify_waveform
 
@@ -148,18 +147,17 @@ def _without_the_line(rec, tire: str, diag):
     line without visible orders, the lugs), refined on the record; least squares over the whole record (the
     line runs through it, the impact's transient projects little on it), so that the decay is the tire's
     alone."""
+    from .body_decay import line_frequency
+
     t, x = rec.time_s, rec.accel_m_s2[tire]
-    freq = diag.final.params.get(f"lug_frequency_{axle_of(tire)}") if "periodic_disturbance" in diag.effects \
-        else None
+    freq, fitted = line_frequency(diag.problem, tire, diag.final if "periodic_disturbance" in diag.effects else None)
     if not freq:
-        line = diag.problem.steady_lines.get(tire)
-        if not line or not line.get("frequency_hz"):
-            return rec
+        return rec
+    if not fitted:
         from ..recording.condition import refine_line
         from .joint_fit import LINE_SEARCH_HZ
 
-        f0 = float(line["frequency_hz"])
-        freq = refine_line(t, x[None, :] - x.mean(), f0, min(LINE_SEARCH_HZ, 0.5 * f0))
+        freq = refine_line(t, x[None, :] - x.mean(), float(freq), min(LINE_SEARCH_HZ, 0.5 * float(freq)))
     w = 2 * math.pi * float(freq)
     basis = np.column_stack([np.sin(w * t), np.cos(w * t), np.ones_like(t)])
     b = np.linalg.lstsq(basis, x, rcond=None)[0]
