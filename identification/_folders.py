@@ -242,6 +242,12 @@ class FolderSet:
 
     # ------------------------------------------------------------------ the lock
     def _lock(self) -> None:
+        """Take the folder's lock; Ctrl-C and SIGTERM wait until it is taken or refused, so that a run stopped
+        there never leaves a lock file it made without knowing it."""
+        with _signals_deferred():
+            self._take_lock()
+
+    def _take_lock(self) -> None:
         import fcntl
 
         path = sibling(self.target, "lock")
@@ -270,6 +276,11 @@ class FolderSet:
         os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
 
     def _unlock(self) -> None:
+        """Remove the lock file and release the lock; a signal meanwhile waits until both are done."""
+        with _signals_deferred():
+            self._release_lock()
+
+    def _release_lock(self) -> None:
         at_forced_exit(self, None)
         fd, self._lock_fd = self._lock_fd, None
         if fd is None:

@@ -373,3 +373,35 @@ def test_a_killed_runs_temporary_folders_go_with_the_next_run(tmp_path):
     assert any(f"_{proc.pid}-" in p.name for p in tmpdir.iterdir())       # nothing could remove it
     assert [p.name for p in clear_dead_temp_folders(tmpdir)] and not any(f"_{proc.pid}-" in p.name
                                                                          for p in tmpdir.iterdir())
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_the_lock_is_taken_leaves_no_lock_behind(tmp_path, monkeypatch, sig):
+    """A signal that comes between the lock file's creation and the lock being held waits for the lock step's
+    end, then unwinds the run: nothing is left beside the folder (a lock left there was seen after SIGTERM)."""
+    import fcntl
+
+    from identification.cli.signals import Terminated
+
+    out = tmp_path / "out"
+    before = plant(out, PREVIOUS)
+    real_flock, sent = fcntl.flock, []
+
+    def flock(fd, op):
+        if not sent:
+            sent.append(1)
+            os.kill(os.getpid(), sig)
+        return real_flock(fd, op)
+
+    def terminated(signum, frame):
+        raise Terminated()
+
+    monkeypatch.setattr(fcntl, "flock", flock)
+    saved = signal.signal(signal.SIGTERM, terminated)
+    try:
+        with pytest.raises(Terminated if sig == signal.SIGTERM else KeyboardInterrupt):
+            with FolderSet(out):
+                pass
+    finally:
+        signal.signal(signal.SIGTERM, saved)
+    assert sent and tree(out) == before and beside(out) == ["out"]
