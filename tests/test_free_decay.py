@@ -145,16 +145,19 @@ def test_an_undetermined_corner_reports_its_own_channel_fit_within_the_range_sea
 
 def test_a_channel_left_above_its_noise_floor_takes_the_free_decays_c_and_keeps_the_joint_k(corners):
     """The joint values inside the free decay's interval: at the noise floor they stand; with a residual
-    above it (here 3x the noise in FL, 5 % of its signal) FL's c is the free decay's, its interval
-    stretched to hold the joint c, and k stays the joint fit's."""
+    above it (here 3x the noise in FL, 5 % of its signal) FL's c is the free decay's, with its interval, and k
+    stays the joint fit's."""
     run, pb, start, fit = corners
     left = {"share": 0.05, "window": [1.0, 1.2], "residual_to_noise": 3.0}
-    diag = dataclasses.replace(_diagnosis(pb, start, fit, fit), unexplained={**{t: None for t in pb.channels},
-                                                                            "FL": left})
+    k = 1.04 * fit.params["k_RL"]          # RL's joint k pulled 4 %, outside the decay's interval
+    pulled = dataclasses.replace(fit, params={**fit.params, "k_RL": k}, ci={**fit.ci, "k_RL": (0.995 * k, 1.005 * k)})
+    diag = dataclasses.replace(_diagnosis(pb, start, fit, pulled), unexplained={**{t: None for t in pb.channels},
+                                                                                "FL": left})
     diag.extra["free_decay"] = check = free_decay_check(diag)
     assert check["FL"]["valid"] and not check["FL"]["prefer"] and check["FL"]["prefer_c"]
     assert not any(check[t]["prefer_c"] for t in ("FR", "RL", "RR"))
     assert check["RL"]["prefer"] and doc_c_source(diag, "RL") == "free_decay"   # outside: both the decay's
+    assert all(not check[t]["prefer"] for t in ("FL", "FR", "RR"))              # the exact rig: inside
     doc = diag.to_json()["tires"]
     rl = doc["FL"]
     assert rl["c_source"] == "free_decay" and rl["c"] == check["FL"]["c"]
@@ -162,12 +165,13 @@ def test_a_channel_left_above_its_noise_floor_takes_the_free_decays_c_and_keeps_
         <= rl["c_ci"][1]
     assert rl["k_source"] == "joint_fit" and rl["k"] == fit.params["k_FL"]
     assert all(doc[t]["c_source"] == "joint_fit" and doc[t]["c"] == fit.params[f"c_{t}"] for t in ("FR", "RR"))
-    # the free decay's values, with an interval that holds the joint fit's interval too (two estimates that
-    # disagree: the truth may lie by either)
+    # the free decay's values with its own interval, which holds the rig's truth and carries the floor of a
+    # rolling tire's decay (DECAY_FLOOR: at least 1 % of the value on each side)
     for tire, q in (("RL", "k"), ("RL", "c"), ("FL", "c")):
         lo, hi = doc[tire][f"{q}_ci"]
-        assert lo <= fit.ci[f"{q}_{tire}"][0] and fit.ci[f"{q}_{tire}"][1] <= hi, (tire, q)
-        assert lo <= check[tire][f"{q}_ci"][0] and check[tire][f"{q}_ci"][1] <= hi, (tire, q)
+        assert [lo, hi] == pytest.approx(check[tire][f"{q}_ci"]), (tire, q)
+        assert lo <= run.truth["tires"][tire][q] <= hi, (tire, q)
+        assert min(doc[tire][q] - lo, hi - doc[tire][q]) >= 0.01 * doc[tire][q], (tire, q)
 
 
 def doc_c_source(diag, tire):
@@ -233,7 +237,8 @@ def rigid():
 def test_a_named_rigid_body_is_checked_against_its_own_free_decay(rigid):
     """Under the rigid body a channel's own decay is the body's mode: the body's free decay over the tail
     (all four channels, :mod:`identification.diagnose.body_decay`) is the check, and it holds the rig's truth;
-    a joint k outside its interval is replaced by the decay's, the interval stretched to hold both."""
+    a joint k outside its interval is replaced by the decay's, with the decay's interval (the pulled joint
+    interval not joined to it), which carries the floor of a rolling tire's decay."""
     run, pb, start, fit, diag = rigid
     check = free_decay_check(diag)
     truth = run.truth["tires"]
@@ -248,7 +253,9 @@ def test_a_named_rigid_body_is_checked_against_its_own_free_decay(rigid):
     assert check2["RL"]["prefer"] and "rigid tractor's free decay" in check2["RL"]["reason"]
     rl = diag2.to_json()["tires"]["RL"]
     assert rl["k_source"] == "free_decay" and rl["k"] == pytest.approx(check2["RL"]["k"])
-    assert rl["k_ci"][0] <= truth["RL"]["k"] <= rl["k_ci"][1] and rl["k_ci"][1] >= 1.01 * k   # holds both
+    assert rl["k_ci"] == pytest.approx(check2["RL"]["k_ci"]) and rl["k_ci"][1] < 0.99 * k
+    assert rl["k_ci"][0] <= truth["RL"]["k"] <= rl["k_ci"][1]
+    assert min(rl["k"] - rl["k_ci"][0], rl["k_ci"][1] - rl["k"]) >= 0.01 * rl["k"]    # the floor, DECAY_FLOOR
 
 
 def test_a_body_decay_that_does_not_count_says_why(rigid, monkeypatch):
