@@ -56,3 +56,36 @@ def test_a_friction_the_free_decays_refute_is_refused_on_corners_only(viscous, r
     weak = _fit(rubbing, ["friction_damping"])
     weak.ci["friction"] = (0.0, 400.0)
     assert not check_tractor("friction_damping", weak, None)[0]
+
+
+def _decays(pb):
+    from identification.identify.waveform import identify_waveform
+    from identification.recording.preprocess import preprocess
+
+    out = {}
+    for tire in pb.channels:
+        sig = preprocess(pb.rec, [tire], cutoff_hz=pb.cutoff_hz, min_peaks=1)[tire]
+        out[tire] = sig, identify_waveform(sig, pb.rec.mass_kg(tire), source=pb.rec.source)
+    return out
+
+
+def test_the_decays_halves_move_with_friction_and_widen_its_c_interval(viscous, rubbing):
+    """The amplitude term of the free decay's interval (free_decay.amplitude_move): on the rig's viscous corners
+    the halves agree within their noise (c's move under 1 % of c); with a 150 N friction force c moves by
+    more than 5 % between the decay's halves on every ringing channel (friction's equivalent damping
+    4F/(πωX) grows as the amplitude X falls), and that move widens the c interval beyond the floor."""
+    from identification.diagnose.free_decay import DECAY_FLOOR, amplitude_move, with_floor
+
+    long, _ = viscous_decays(viscous)
+    for tire, (sig, wave) in _decays(viscous).items():
+        if tire in long:
+            assert amplitude_move(sig, wave)["c"] < 0.01 * wave.c, tire
+    long, _ = viscous_decays(rubbing)
+    assert len(long) >= 2
+    for tire, (sig, wave) in _decays(rubbing).items():
+        if tire not in long:
+            continue
+        moved = amplitude_move(sig, wave)
+        assert moved["c"] > 0.05 * wave.c, (tire, moved)
+        lo, hi = with_floor(wave.c, wave.c_ci, "c", moved["c"])
+        assert min(wave.c - lo, hi - wave.c) >= moved["c"] > DECAY_FLOOR["c"] * wave.c

@@ -48,7 +48,7 @@ from ..recording.preprocess import DEFAULT_CUTOFF_HZ, TireSignal, preprocess
 from ..recording import Recording
 
 __all__ = ["WaveformResult", "fit_free_decay", "identify_waveform", "long_run_variance_ratio", "decay_misfit",
-           "envelope_ratio",
+           "envelope_ratio", "halves",
            "WINDOW_SHIFT_PERIODS", "ONE_MODE_R2", "MAX_SKIPPED_PEAKS"]
 
 #: The window-shift check starts the fit this many damped periods after the free decay's first peak.
@@ -215,13 +215,7 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
         raise InputError(source, f"channel {sig.tire}: the waveform fit found no decaying oscillation "
                                  f"(decay rate {sigma:.3g} 1/s)")
     wn2 = wd * wd + sigma * sigma
-    k, c = mass_kg * wn2, 2 * mass_kg * sigma
-    grad_k = np.array([2 * mass_kg * sigma, 2 * mass_kg * wd])
-    grad_c = np.array([2 * mass_kg, 0.0])
-    sub = cov[:2, :2]
-    q = float(stats.t.ppf(0.975, max(1, sel.sum() - params.size)))
-    hk = q * math.sqrt(max(0.0, float(grad_k @ sub @ grad_k)))
-    hc = q * math.sqrt(max(0.0, float(grad_c @ sub @ grad_c)))
+    k, c, hk, hc = _k_c(params, cov, int(sel.sum()), mass_kg)
     if not all(math.isfinite(v) for v in (k, c, hk, hc, r2)):
         raise InputError(source, f"channel {sig.tire}: the waveform fit gave no finite stiffness and damping "
                                  f"(k {k:.3g} N/m, c {c:.3g} N*s/m)")
@@ -236,6 +230,20 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
         k_ci=(k - hk, k + hk), c_ci=(c - hc, c + hc), n_samples=int(sel.sum()),
         window_s=(float(t[sel][0]), float(t[sel][-1])), variance_inflation=inflation, window=window,
         decay_misfit=inflation, window_shift=shift, skipped_peaks=skipped)
+
+
+def _k_c(params, cov, n: int, mass_kg: float) -> tuple[float, float, float, float]:
+    """(k, c, 95 % half-width of k, of c) of a damped-sinusoid fit's `params` and covariance `cov` over `n`
+    samples (the delta method, Student's t quantile)."""
+    sigma, wd = float(params[0]), abs(float(params[1]))
+    k, c = mass_kg * (wd * wd + sigma * sigma), 2 * mass_kg * sigma
+    grad_k = np.array([2 * mass_kg * sigma, 2 * mass_kg * wd])
+    grad_c = np.array([2 * mass_kg, 0.0])
+    sub = cov[:2, :2]
+    q = float(stats.t.ppf(0.975, max(1, n - len(params))))
+    hk = q * math.sqrt(max(0.0, float(grad_k @ sub @ grad_k)))
+    hc = q * math.sqrt(max(0.0, float(grad_c @ sub @ grad_c)))
+    return k, c, hk, hc
 
 
 def _refit_from(t, accel, start_s: float, end_s: float, params):
@@ -277,6 +285,21 @@ def _window_shift(t, accel, start_s: float, end_s: float, params, mass_kg: float
         return math.nan, math.nan
     sigma, wd = float(later[1][0][0]), abs(float(later[1][0][1]))
     return mass_kg * (wd * wd + sigma * sigma) - k, 2 * mass_kg * sigma - c
+
+
+def halves(sig: TireSignal, result: WaveformResult) -> list:
+    """[(k, c, half-width of k, of c)] of the first and the second half of `result`'s window, each refitted from
+    the whole window's values; None for a half that cannot be fitted.  At a larger amplitude (the first half)
+    a tire whose stiffness or damping depends on the amplitude (progressive, rubbing) gives other values than
+    at a smaller one."""
+    t0, t1 = result.window_s
+    mid = 0.5 * (t0 + t1)
+    seed = np.array([-result.decay_rate, 2 * math.pi / result.T])
+    out = []
+    for a, b in ((t0, mid), (mid, t1)):
+        fit = _refit_from(sig.time_s, sig.raw_m_s2, a, b, seed)
+        out.append(None if fit is None else _k_c(fit[1][0], fit[1][1], int(fit[0].sum()), result.mass))
+    return out
 
 
 def envelope_ratio(sig: TireSignal, result: WaveformResult) -> float:
