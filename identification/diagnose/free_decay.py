@@ -79,11 +79,10 @@ MIN_DECAY_R2 = ONE_MODE_R2
 #: Relative half-width added in quadrature to a free decay's 95 % intervals of k and c (:func:`with_floor`): how far
 #: a rolling tire's free-decay equivalent stands from the standing tire's (a wheel released on flat ground, the
 #: definition of k and c) beyond what the decay's noise explains.  Measured on the independent simulator's
-#: clean corner decays (tuning seeds 101-106, 111-116, 121-126, 131-136, 141-146, 151-156 without lugs; 86
-#: decays with R² >= 0.985 and no friction): the decay's own intervals held the truth's k for 64 % and c for 94 %;
-#: the k error is the same in the decay's first and second halves (no amplitude effect the data could
-#: correct); 95 % of the decays needed at most 0.82 % more on k, all of them 1.5 %; with 1 % added the
-#: intervals hold k for 99 %, c for 97 %.
+#: tuning seeds (``benchmarks/free_decay_floor.py``: 67 clean corner decays, R² >= 0.985, linear tires without
+#: friction): the decay's own intervals held the truth's k for 60 % and c for 94 %, with 1 % added for 100 %
+#: and 96 % (median k half-width 1.01 %; 0.5 % added: 79 %); the k error is the same in the decay's first
+#: and second halves, no amplitude effect the data could correct.
 DECAY_FLOOR = {"k": 0.01, "c": 0.01}
 #: Named, these make the decay's shape other than a damped sinusoid.  (A steady line rides on it and is taken
 #: out first: :func:`_without_the_line`.)
