@@ -1,6 +1,5 @@
 """How often a free decay's 95 % intervals hold the independent simulator's truth, with and without the floor
-and the amplitude term the diagnosis adds (``identification.diagnose.free_decay``: ``DECAY_FLOOR``,
-``amplitude_move``).
+and the amplitude term (``identification.identify.waveform``: ``DECAY_FLOOR``, ``WaveformResult.amplitude_move``).
 
 For each independent-corner recording of ``--seeds`` (no lugs: their line is taken out by the diagnosis
 first) and each channel whose waveform fit explains its free decay to R² >= 0.985, the decay's k and c
@@ -29,9 +28,9 @@ sys.path.insert(0, str(ROOT))
 
 def decays(csv: Path) -> list[dict]:
     """One row per clean free decay of the recording `csv`: its fit, its halves' move and the truth."""
-    from identification.diagnose.free_decay import MIN_DECAY_R2, amplitude_move
+    from identification.diagnose.free_decay import MIN_DECAY_R2
     from identification.errors import InputError
-    from identification.identify.waveform import identify_waveform
+    from identification.identify.waveform import DECAY_FLOOR, identify_waveform
     from identification.model.fitting import TractorProblem
     from identification.recording.preprocess import default_cutoff_hz, preprocess
     from identification.recording.record import read_recording
@@ -53,9 +52,14 @@ def decays(csv: Path) -> list[dict]:
         if wave.r2 < MIN_DECAY_R2:
             continue
         kind = "rubbing" if tt.get("friction_N") else "progressive" if (tt.get("exponent") or 0.5) > 0.5 else "clean"
-        rows.append({"kind": kind, "k": wave.k, "c": wave.c, "hk": (wave.k_ci[1] - wave.k_ci[0]) / 2,
-                     "hc": (wave.c_ci[1] - wave.c_ci[0]) / 2, "tk": tt["k"], "tc": tt["c"],
-                     "moved": amplitude_move(sig, wave)})
+        row = {"kind": kind, "tk": tt["k"], "tc": tt["c"], "moved": {}}
+        for i, q in enumerate("kc"):
+            value, (lo, hi) = (wave.k, wave.c)[i], (wave.k_ci, wave.c_ci)[i]
+            moved = wave.amplitude_move[i]
+            row[q], row["moved"][q] = value, moved
+            # the noise's part (the fit's covariance and the window shift): the floor and the move taken out
+            row["h" + q] = math.sqrt(max(0.0, ((hi - lo) / 2) ** 2 - (DECAY_FLOOR[q] * value) ** 2 - moved ** 2))
+        rows.append(row)
     return rows
 
 

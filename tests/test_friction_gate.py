@@ -70,22 +70,21 @@ def _decays(pb):
 
 
 def test_the_decays_halves_move_with_friction_and_widen_its_c_interval(viscous, rubbing):
-    """The amplitude term of the free decay's interval (free_decay.amplitude_move): on the rig's viscous corners
-    the halves agree within their noise (c's move under 1 % of c); with a 150 N friction force c moves by
-    more than 5 % between the decay's halves on every ringing channel (friction's equivalent damping
-    4F/(πωX) grows as the amplitude X falls), and that move widens the c interval beyond the floor."""
-    from identification.diagnose.free_decay import DECAY_FLOOR, amplitude_move, with_floor
+    """The amplitude term of the free decay's interval (``WaveformResult.amplitude_move``): on the rig's viscous
+    corners the halves agree within their noise (c's move under 1 % of c); with a 150 N friction force c moves
+    by more than 5 % between the decay's halves on every ringing channel (friction's equivalent damping
+    4F/(πωX) grows as the amplitude X falls), and the c interval holds that move beyond the floor."""
+    from identification.identify.waveform import DECAY_FLOOR
 
     long, _ = viscous_decays(viscous)
     for tire, (sig, wave) in _decays(viscous).items():
         if tire in long:
-            assert amplitude_move(sig, wave)["c"] < 0.01 * wave.c, tire
+            assert wave.amplitude_move[1] < 0.01 * wave.c, tire
     long, _ = viscous_decays(rubbing)
     assert len(long) >= 2
     for tire, (sig, wave) in _decays(rubbing).items():
         if tire not in long:
             continue
-        moved = amplitude_move(sig, wave)
-        assert moved["c"] > 0.05 * wave.c, (tire, moved)
-        lo, hi = with_floor(wave.c, wave.c_ci, "c", moved["c"])
-        assert min(wave.c - lo, hi - wave.c) >= moved["c"] > DECAY_FLOOR["c"] * wave.c
+        moved = wave.amplitude_move[1]
+        assert moved > 0.05 * wave.c > DECAY_FLOOR["c"] * wave.c, (tire, moved)
+        assert min(wave.c - wave.c_ci[0], wave.c_ci[1] - wave.c) >= moved

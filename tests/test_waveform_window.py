@@ -4,9 +4,12 @@ Reference: closed forms of a damped sinusoid (k = m ω_n², c = 2 m ζ ω_n), on
 
 import math
 
+import numpy as np
+import pytest
+
 from conftest import LOADS_N, analytic_recording, damped_sine, true_k
 
-from identification.identify.waveform import identify_waveform_recording
+from identification.identify.waveform import DECAY_FLOOR, identify_waveform_recording
 from identification.recording import STANDARD_GRAVITY, Recording
 
 MODE = (21.65, 0.08)
@@ -25,9 +28,12 @@ def _fit(extra_mode=None):
 
 
 def _white_half_width(r, q):
+    """The noise's part of the half-width: without the window shift, the halves' move and the floor."""
     lo, hi = getattr(r, f"{q}_ci")
-    shift = r.window_shift["kc".index(q)]
-    return math.sqrt(max(0.0, ((hi - lo) / 2) ** 2 - shift ** 2))
+    i = "kc".index(q)
+    value = (r.k, r.c)[i]
+    others = r.window_shift[i] ** 2 + r.amplitude_move[i] ** 2 + (DECAY_FLOOR[q] * value) ** 2
+    return math.sqrt(max(0.0, ((hi - lo) / 2) ** 2 - others))
 
 
 def test_one_clean_mode_moves_at_the_noise_level_and_its_interval_holds_the_closed_form():
@@ -75,3 +81,38 @@ def test_a_decay_whose_first_peak_is_still_forced_is_fitted_from_the_next_one(mo
     first = identify_waveform_recording(_forced_start(5.0), ["FL"])["FL"]
     assert first.skipped_peaks == 0 and first.r2 < waveform.ONE_MODE_R2
     assert abs(first.c / c - 1) > 5 * abs(r.c / c - 1)
+
+
+def _amplitude_dependent(beta):
+    """The mode MODE whose damped frequency is (1 + β e^{-σ τ}) ω_d: higher at the large amplitude of the decay's
+    start (a progressive tire), ω_d at the small amplitude the standing tire's k stands for."""
+    wn, zeta = MODE
+    sigma, wd = zeta * wn, wn * math.sqrt(1 - zeta ** 2)
+    rec = analytic_recording(noise=0.02, seed=1, tires=("FL",), modes={"FL": MODE})
+    tau = rec.time_s - 0.5
+    phase = wd * tau + wd * beta * (1 - np.exp(-sigma * tau)) / sigma
+    accel = np.where(tau >= 0, 15.0 * np.exp(-sigma * tau) * np.sin(phase), 0.0)
+    accel = accel + 0.02 * np.random.default_rng(1).standard_normal(tau.size)
+    rec = Recording(time_s=rec.time_s, accel_m_s2={"FL": accel}, speed_m_s=rec.speed_m_s,
+                    cleat_height_m=0.04, cleat_width_m=0.1, wheelbase_m=rec.wheelbase_m,
+                    wheel_load_N=rec.wheel_load_N)
+    return identify_waveform_recording(rec, ["FL"])["FL"]
+
+
+def test_a_stiffness_that_rises_with_the_amplitude_moves_the_halves_and_the_interval_holds_the_small_one():
+    """Closed form: k = m ω_n² at the small amplitude.  One mode without amplitude dependence: no move, the
+    interval the noise's and the 1 % floor.  A frequency 4 % higher at the decay's start pulls the whole
+    window's k about 2 % up; the halves' move widens the interval to hold the small-amplitude k, which the
+    noise, the window shift and the floor alone miss."""
+    k = true_k("FL", MODE)
+    clean = _amplitude_dependent(0.0)
+    assert clean.amplitude_move[0] == 0.0
+    assert 0.01 * clean.k <= (clean.k_ci[1] - clean.k_ci[0]) / 2 <= 0.011 * clean.k     # the floor, little noise
+    assert clean.k_ci[0] <= k <= clean.k_ci[1]
+    r = _amplitude_dependent(0.04)
+    assert r.k / k - 1 > 0.015                                             # pulled up by the large amplitude
+    assert r.amplitude_move[0] > 0.02 * r.k
+    assert r.k_ci[0] <= k <= r.k_ci[1]
+    without = math.hypot(_white_half_width(r, "k"), r.window_shift[0], DECAY_FLOOR["k"] * r.k)
+    assert r.k - without > k                                               # the move is what holds it
+    assert r.to_json()["amplitude_move"]["k"] == pytest.approx(r.amplitude_move[0])

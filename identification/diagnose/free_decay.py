@@ -8,9 +8,10 @@ taken out of the channel first, :func:`_without_the_line`), the waveform fit of 
 needs the least of the model: the tire on flat ground.  The joint fit's k and c
 must agree with it within their joint 95 % interval, √(h_joint² + h_decay²) (h the half-widths, each
 interval's side facing the other estimate).
-The free decay's intervals carry its noise (the fit's covariance, inflated by the residual's colour and the
-move of a later window) and :data:`DECAY_FLOOR`, how far a rolling tire's decay stands from the standing
-tire that defines k and c.
+The free decay's intervals (:func:`~identification.identify.waveform.identify_waveform`'s) carry its noise (the
+fit's covariance, inflated by the residual's colour and the move of a later window), the move between its
+two halves (an amplitude-dependent tire) and :data:`~identification.identify.waveform.DECAY_FLOOR`, how far a
+rolling tire's decay stands from the standing tire that defines k and c.
 Where the joint fit's k or c lies outside the free decay's 95 % interval, the joint fit was pulled
 by what its model gets wrong in the impact (a cleat shape, a footprint, an acquisition chain): the
 tire's k and c are then the free decay's with its intervals (``"k_source": "free_decay"``; the extended
@@ -63,7 +64,7 @@ import numpy as np
 from ..errors import InputError
 from ..recording.preprocess import preprocess
 from ..recording import STANDARD_GRAVITY
-from ..identify.waveform import ONE_MODE_R2, identify_waveform
+from ..identify.waveform import ONE_MODE_R2, identify_waveform, with_floor
 
 __all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS", "UNDETERMINED_SHARE"]
 
@@ -76,14 +77,6 @@ BODY_EFFECTS = ("axle_coupling", "roll_coupling", "front_axle_pivot")
 #: The waveform fit must explain its window to this R² to count as the free decay of a linear corner (below
 #: it: the tire still on the cleat, a progressive tire or a coupled body the diagnosis did not name).
 MIN_DECAY_R2 = ONE_MODE_R2
-#: Relative half-width added in quadrature to a free decay's 95 % intervals of k and c (:func:`with_floor`): how far
-#: a rolling tire's free-decay equivalent stands from the standing tire's (a wheel released on flat ground, the
-#: definition of k and c) beyond what the decay's noise explains.  Measured on the independent simulator's
-#: tuning seeds (``benchmarks/free_decay_floor.py``: 67 clean corner decays, R² >= 0.985, linear tires without
-#: friction): the decay's own intervals held the truth's k for 60 % and c for 94 %, with 1 % added for 100 %
-#: and 96 % (median k half-width 1.01 %; 0.5 % added: 79 %); the k error is the same in the decay's first
-#: and second halves, no amplitude effect the data could correct.
-DECAY_FLOOR = {"k": 0.01, "c": 0.01}
 #: Named, these make the decay's shape other than a damped sinusoid.  (A steady line rides on it and is taken
 #: out first: :func:`_without_the_line`.)
 SHAPE_EFFECTS = ("friction_damping", "nonlinear_stiffness")
@@ -118,10 +111,9 @@ def free_decay_check(diag) -> dict:
             out[tire] = {"valid": False, "why_not": f"no waveform fit: {exc.problem}"}
             continue
         fin = diag.final
-        moved = amplitude_move(sig, wave)
         entry = {"valid": True, "why_not": None, "k": float(wave.k), "c": float(wave.c),
-                 "k_ci": with_floor(wave.k, wave.k_ci, "k", moved["k"]),
-                 "c_ci": with_floor(wave.c, wave.c_ci, "c", moved["c"]), "amplitude_move": moved}
+                 "k_ci": [float(v) for v in wave.k_ci], "c_ci": [float(v) for v in wave.c_ci],
+                 "amplitude_move": {q: float(v) for q, v in zip("kc", wave.amplitude_move)}}
         why_not = no_check
         if why_not is None and wave.r2 < MIN_DECAY_R2:   # a forced response, a progressive or coupled hub
             why_not = f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < {MIN_DECAY_R2})"
@@ -153,34 +145,6 @@ def free_decay_check(diag) -> dict:
     for tire, entry in out.items():
         entry.update(_searched(diag, tire))
         _undetermined(diag, tire, entry)
-    return out
-
-
-def with_floor(value: float, ci, q: str, moved: float = 0.0) -> list:
-    """The interval `ci` of a free decay's `value` of quantity `q` ('k' or 'c') with :data:`DECAY_FLOOR` of the
-    value and `moved` (:func:`amplitude_move`) added in quadrature on each side."""
-    floor = math.hypot(DECAY_FLOOR[q] * abs(value), moved)
-    return [float(value - math.hypot(value - ci[0], floor)), float(value + math.hypot(ci[1] - value, floor))]
-
-
-def amplitude_move(sig, wave) -> dict:
-    """``{"k": Δk, "c": Δc}``: how far the decay's two halves (:func:`~identification.identify.waveform.halves`,
-    the larger amplitude and the smaller) stand apart beyond what their noise explains,
-    √max(0, (x₂ − x₁)² − h₁² − h₂²) (h their 95 % half-widths); 0 where a half cannot be fitted.  A tire
-    whose stiffness or damping depends on the amplitude (progressive, rubbing) moves its values as the decay
-    falls, and the small amplitude the standing tire's k and c stand for lies beyond the second half.
-    Measured on the independent simulator's tuning seeds: it leaves the clean decays' intervals as they are
-    (median k half-width 1.01 %), takes a missed friction's c intervals from holding the truth for 18 % to
-    64 % and a progressive tire's k from 95 % to 100 %."""
-    from ..identify.waveform import halves
-
-    first, second = halves(sig, wave)
-    if first is None or second is None:
-        return {"k": 0.0, "c": 0.0}
-    out = {}
-    for i, q in enumerate("kc"):
-        excess = (second[i] - first[i]) ** 2 - first[i + 2] ** 2 - second[i + 2] ** 2
-        out[q] = float(math.sqrt(excess)) if math.isfinite(excess) and excess > 0 else 0.0
     return out
 
 
@@ -322,7 +286,7 @@ def _channel_fit_instead(diag, tire: str) -> dict:
 def reported(value: float, ci, check: dict, q: str) -> tuple[float, list]:
     """The tire's value and interval of quantity `q` ('k' or 'c'): the joint fit's, or, where the joint fit's k
     or c lies outside the free decay's interval (and, for c, where the joint model leaves the channel above its
-    noise floor), the free decay's with its interval (which carries :data:`DECAY_FLOOR`); where the
+    noise floor), the free decay's with its interval (which carries :data:`~identification.identify.waveform.DECAY_FLOOR`); where the
     joint fit collapsed (:func:`collapsed`), the channel's own fit's with the range searched; where the model leaves too much of the channel unexplained (``undetermined``), the
     channel's own fit's (no body named: :func:`_undetermined`) or the joint fit's, with the range searched."""
     if check.get("collapsed") or check.get("decay_only"):
