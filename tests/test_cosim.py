@@ -217,8 +217,10 @@ def test_waveform_identify_cli(cli, tmp_path, baseline_runs):
     doc = json.loads(res.out)
     for tire, entry in doc["tires"].items():
         assert set(entry) == {"k", "c", "T", "delta", "zeta", "omega_n", "r2", "n_peaks", "mass", "k_ci", "c_ci",
-                              "decay_misfit", "warning", "window_shift", "skipped_peaks"}
+                              "decay_misfit", "warning", "window_shift", "skipped_peaks", "amplitude_move", "floor"}
         assert all(abs(entry["window_shift"][q]) < 0.01 * entry[q] for q in "kc")   # one mode: little move
+        assert all(entry["amplitude_move"][q] < 0.01 * entry[q] for q in "kc")      # a linear tire: halves agree
+        assert entry["floor"] == {"k": 0.01, "c": 0.01}
         assert entry["skipped_peaks"] == 0                                            # and from its first peak
         assert entry["warning"] is None and entry["decay_misfit"] < 2.0     # the rig's baseline: one mode
         lo, hi = entry["k_ci"]

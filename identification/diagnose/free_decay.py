@@ -18,7 +18,7 @@ tire's k and c are then the free decay's with its intervals (``"k_source": "free
 model keeps its own in ``parameters``, as its FMUs carry them), and a warning says so, by how much (and in
 joint half-widths where the two intervals do not even overlap so far).  The joint fit's interval is not
 joined to the decay's: a fit pulled by a model error measures that error, not the tire (on the acceptance
-seeds it widened the median k interval from about 1 % to 8.6 % around decays within 1.5 % of the truth).  Where both lie inside but the joint model leaves the channel
+seeds it widened the median k interval from about 1 % to 8.6 %).  Where both lie inside but the joint model leaves the channel
 above its noise floor, c alone is the free decay's (``"c_source": "free_decay"``): the decay rate is
 what a mis-modelled impact pulls (its energy input trades against the damping), the frequency is held
 by the whole record.  On the independent simulator's tuning seeds (100-139), of the 12 tires whose joint
