@@ -362,13 +362,10 @@ def envelope_ratio(sig: TireSignal, result: WaveformResult) -> float:
     friction force F acts: its equivalent damping 4 F / (π ω X) grows as the amplitude X falls, and the
     oscillation stops once the spring no longer overcomes F (a second half one damped mode fits badly).
     """
-    t0, t1 = result.window_s
-    mid = 0.5 * (t0 + t1)
-    seed = np.array([-result.decay_rate, 2 * math.pi / result.T])
-    halves = [_refit_from(sig.time_s, sig.raw_m_s2, a, b, seed) for a, b in ((t0, mid), (mid, t1))]
-    if any(h is None for h in halves):
+    first, second = halves(sig, result)
+    if first is None or second is None:
         return math.nan
-    return float(halves[1][1][0][0] / halves[0][1][0][0])
+    return float(second[1] / first[1])          # c = 2 m σ: the ratio of the halves' c is that of σ
 
 
 def decay_misfit(sig: TireSignal, mass_kg: float) -> float | None:
