@@ -271,9 +271,9 @@ VISCOUS_RATIO = (0.8, 1.25)
 
 def viscous_decays(pb) -> tuple[list, dict]:
     """(channels whose own free decay spans :data:`MIN_DECAY_CYCLES` cycles and falls :data:`MIN_DECAY_FALL`x,
-    {those of them that decay viscously: their :func:`~identification.identify.waveform.envelope_ratio`})."""
+    {those of them that decay viscously: their ``WaveformResult.envelope_ratio``})."""
     from ..errors import InputError
-    from ..identify.waveform import envelope_ratio, identify_waveform
+    from ..identify.waveform import identify_waveform
     from ..recording.preprocess import preprocess
 
     long, viscous = [], {}
@@ -287,7 +287,7 @@ def viscous_decays(pb) -> tuple[list, dict]:
         if span / res.T < MIN_DECAY_CYCLES or -res.decay_rate * span < math.log(MIN_DECAY_FALL):
             continue
         long.append(tire)
-        ratio = envelope_ratio(sig, res)
+        ratio = res.envelope_ratio
         if res.r2 >= VISCOUS_R2 and VISCOUS_RATIO[0] <= ratio <= VISCOUS_RATIO[1]:
             viscous[tire] = ratio
     return long, viscous

@@ -48,7 +48,7 @@ from ..recording.preprocess import DEFAULT_CUTOFF_HZ, TireSignal, preprocess
 from ..recording import Recording
 
 __all__ = ["WaveformResult", "fit_free_decay", "identify_waveform", "long_run_variance_ratio", "decay_misfit",
-           "envelope_ratio", "halves", "with_floor", "DECAY_FLOOR", "AMPLITUDE_MOVE_FACTOR",
+           "with_floor", "DECAY_FLOOR", "AMPLITUDE_MOVE_FACTOR",
            "WINDOW_SHIFT_PERIODS", "ONE_MODE_R2", "MAX_SKIPPED_PEAKS"]
 
 #: The window-shift check starts the fit this many damped periods after the free decay's first peak.
@@ -100,6 +100,11 @@ class WaveformResult(PaperResult):
         their 95 % half-widths (0 where a half cannot be fitted): a tire whose stiffness or damping depends
         on the amplitude (progressive, rubbing), whose small-amplitude values lie beyond the second half.
         Added to each half-width in quadrature, with :data:`DECAY_FLOOR`.
+    envelope_ratio : float
+        The decay rate over the window's second half divided by that over its first (the same two refits;
+        NaN where a half cannot be fitted).  About 1 for a viscous damper, whose decay rate does not depend on
+        the amplitude; away from 1 where a friction force F acts: its equivalent damping 4 F / (π ω X) grows as
+        the amplitude X falls, and the oscillation stops once the spring no longer overcomes F.
     """
 
     k_ci: tuple[float, float] = (math.nan, math.nan)
@@ -110,6 +115,7 @@ class WaveformResult(PaperResult):
     window_shift: tuple[float, float] = (math.nan, math.nan)
     skipped_peaks: int = 0
     amplitude_move: tuple[float, float] = (0.0, 0.0)
+    envelope_ratio: float = math.nan
 
     def warning(self) -> str | None:
         """The one-mode fit's warning (:meth:`PaperResult.warning`), and where the fit skipped peaks, why."""
@@ -248,7 +254,9 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
     if all(math.isfinite(v) for v in shift):
         hk, hc = math.hypot(hk, shift[0]), math.hypot(hc, shift[1])
     t_sel = t[sel]
-    moved = _amplitude_move(t, sig.raw_m_s2, (float(t_sel[0]), float(t_sel[-1])), params, mass_kg)
+    first, second = _halves(t, sig.raw_m_s2, (float(t_sel[0]), float(t_sel[-1])), params, mass_kg)
+    moved = _amplitude_move(first, second)
+    ratio = math.nan if first is None or second is None else float(second[1] / first[1])   # c = 2 m σ
     hk = math.hypot(hk, DECAY_FLOOR["k"] * k, moved[0])
     hc = math.hypot(hc, DECAY_FLOOR["c"] * c, moved[1])
     return WaveformResult(
@@ -256,7 +264,8 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
         omega_n=math.sqrt(wn2), r2=r2, n_peaks=int(sig.peak_times_s.size), mass=mass_kg, decay_rate=-sigma,
         k_ci=(k - hk, k + hk), c_ci=(c - hc, c + hc), n_samples=int(sel.sum()),
         window_s=(float(t[sel][0]), float(t[sel][-1])), variance_inflation=inflation, window=window,
-        decay_misfit=inflation, window_shift=shift, skipped_peaks=skipped, amplitude_move=moved)
+        decay_misfit=inflation, window_shift=shift, skipped_peaks=skipped, amplitude_move=moved,
+        envelope_ratio=ratio)
 
 
 def _k_c(params, cov, n: int, mass_kg: float) -> tuple[float, float, float, float]:
@@ -314,16 +323,9 @@ def _window_shift(t, accel, start_s: float, end_s: float, params, mass_kg: float
     return mass_kg * (wd * wd + sigma * sigma) - k, 2 * mass_kg * sigma - c
 
 
-def halves(sig: TireSignal, result: WaveformResult) -> list:
-    """[(k, c, half-width of k, of c)] of the first and the second half of `result`'s window, each refitted from
-    the whole window's values; None for a half that cannot be fitted.  At a larger amplitude (the first half)
-    a tire whose stiffness or damping depends on the amplitude (progressive, rubbing) gives other values than
-    at a smaller one."""
-    seed = np.array([-result.decay_rate, 2 * math.pi / result.T])
-    return _halves(sig.time_s, sig.raw_m_s2, result.window_s, seed, result.mass)
-
-
 def _halves(t, accel, window_s, params, mass_kg: float) -> list:
+    """[(k, c, half-width of k, of c)] of the first and the second half of the window `window_s`, each refitted
+    from the whole window's `params`; None for a half that cannot be fitted."""
     t0, t1 = window_s
     mid = 0.5 * (t0 + t1)
     out = []
@@ -333,9 +335,9 @@ def _halves(t, accel, window_s, params, mass_kg: float) -> list:
     return out
 
 
-def _amplitude_move(t, accel, window_s, params, mass_kg: float) -> tuple[float, float]:
-    """(Δk, Δc): how far the window's halves stand apart beyond their noise (:attr:`WaveformResult.amplitude_move`)."""
-    first, second = _halves(t, accel, window_s, params, mass_kg)
+def _amplitude_move(first, second) -> tuple[float, float]:
+    """(Δk, Δc): how far the window's halves (:func:`_halves`) stand apart beyond their noise
+    (:attr:`WaveformResult.amplitude_move`)."""
     if first is None or second is None:
         return 0.0, 0.0
     out = []
@@ -352,20 +354,6 @@ def with_floor(value: float, ci, q: str) -> list:
     whose intervals carry it already)."""
     floor = DECAY_FLOOR[q] * abs(value)
     return [float(value - math.hypot(value - ci[0], floor)), float(value + math.hypot(ci[1] - value, floor))]
-
-
-def envelope_ratio(sig: TireSignal, result: WaveformResult) -> float:
-    """The decay rate over the second half of `result`'s window divided by that over its first half (each
-    half refitted from the whole window's values; NaN where a half cannot be fitted).
-
-    About 1 for a viscous damper, whose decay rate does not depend on the amplitude; away from 1 where a
-    friction force F acts: its equivalent damping 4 F / (π ω X) grows as the amplitude X falls, and the
-    oscillation stops once the spring no longer overcomes F (a second half one damped mode fits badly).
-    """
-    first, second = halves(sig, result)
-    if first is None or second is None:
-        return math.nan
-    return float(second[1] / first[1])          # c = 2 m σ: the ratio of the halves' c is that of σ
 
 
 def decay_misfit(sig: TireSignal, mass_kg: float) -> float | None:
