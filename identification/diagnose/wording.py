@@ -1,6 +1,6 @@
 """The diagnosis' words, as every output gives them (the command line, the JSON's readers, the report).
 
-Plain string functions over the diagnosis' JSON (:meth:`~identification.diagnose.joint_select.TractorDiagnosis.to_json`),
+Plain string functions over the diagnosis' JSON (:meth:`~identification.diagnose.joint_result.TractorDiagnosis.to_json`),
 light to import: the report imports them without the fit's numerical code.
 """
 
