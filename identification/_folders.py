@@ -110,12 +110,15 @@ def _exchange(a: Path, b: Path) -> bool:
 
 @contextlib.contextmanager
 def _signals_deferred():
-    """Ctrl-C and SIGTERM wait until the block is done (main thread; elsewhere the block runs as is)."""
+    """Ctrl-C, SIGTERM and SIGALRM (the command's retry of a signal that came in fragile code, which raises
+    too: :mod:`identification.cli.signals`) wait until the block is done (main thread; elsewhere the block
+    runs as is)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     got: list[int] = []
-    saved = {s: signal.signal(s, lambda signum, frame: got.append(signum)) for s in (signal.SIGINT, signal.SIGTERM)}
+    saved = {s: signal.signal(s, lambda signum, frame: got.append(signum))
+             for s in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)}
     try:
         yield
     finally:
