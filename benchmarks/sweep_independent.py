@@ -117,6 +117,12 @@ def analyse(job) -> dict:
                                 d["free_decay_check"]["c_range"][0] <= tt["c"] <= d["free_decay_check"]["c_range"][1]),
              "undetermined": bool(not d.get("k_ci") or not all(map(np.isfinite, d["k_ci"]))
                                   or (d["k_ci"][1] - d["k_ci"][0]) / 2 > 0.5 * d["k"])}
+        check = d.get("free_decay_check") or {}
+        if check.get("k_ci") and "r2" in check:   # the free decay's own fit, valid or not, against the truth
+            e.update(decay_r2=check["r2"], decay_valid=bool(check.get("valid")),
+                     decay_k_err=check["k"] / tt["k"] - 1, decay_c_err=check["c"] / tt["c"] - 1,
+                     decay_k_in=bool(check["k_ci"][0] <= tt["k"] <= check["k_ci"][1]),
+                     decay_c_in=bool(check["c_ci"][0] <= tt["c"] <= check["c_ci"][1]))
         wt = (wave or {}).get("tires", {}).get(w) or {}
         if "fallback" in wt:
             wt = wt["fallback"] or {}

@@ -70,9 +70,11 @@ def test_rear_k_twice_the_truth_misplaces_the_rear_arrivals_and_the_scaled_searc
         assert scaled["tires"][f"k_{t}"] == pytest.approx(tires[t]["k"], rel=0.3)
 
 
-def test_compiled_coarse_minimum_is_the_first_minimum_of_the_score_array():
+@pytest.mark.parametrize("fit_scale", [False, True])
+def test_compiled_coarse_minimum_is_the_first_minimum_of_the_score_array(fit_scale):
     """The search's compiled one-pass minimum against numpy's argmin (first occurrence) of the scores
-    written out over (stagger, delay, arrival), with ties, records' edges (-inf) and rows of no arrival."""
+    written out over (stagger, delay, arrival): Q - 2 L, or with the responses' scale fitted -L²/Q (0 for a
+    scale of 0), with ties, records' edges (-inf) and rows of no arrival."""
     from identification.diagnose.joint_timing import _coarse_min, _coarse_min_arrays
 
     rng = np.random.default_rng(3)
@@ -88,12 +90,17 @@ def test_compiled_coarse_minimum_is_the_first_minimum_of_the_score_array():
         for a in range(s):
             for b in range(d):
                 for c in range(i):
-                    scores[a, b, c] = 10.0 + crossed[a, b] - 2 * (front[a, c] + back[a, b + c])
+                    lin, q = front[a, c] + back[a, b + c], 10.0 + crossed[a, b]
+                    if not fit_scale:
+                        scores[a, b, c] = q - 2 * lin
+                    else:
+                        scores[a, b, c] = (math.inf if not math.isfinite(lin) else
+                                           -lin * lin / q if lin > 0 and q > 0 else 0.0)
         j = int(np.argmin(scores))
         expect = (float(scores.flat[j]),) + tuple(int(k) for k in np.unravel_index(j, scores.shape))
-        got = _coarse_min(10.0, crossed, front, back)
+        got = _coarse_min(10.0, crossed, front, back, fit_scale)
         if not math.isfinite(expect[0]):
-            assert math.isinf(got[0]) and math.isinf(_coarse_min_arrays(10.0, crossed, front, back)[0])
+            assert math.isinf(got[0]) and math.isinf(_coarse_min_arrays(10.0, crossed, front, back, fit_scale)[0])
             continue
         assert tuple(got) == expect
-        assert _coarse_min_arrays(10.0, crossed, front, back) == expect
+        assert _coarse_min_arrays(10.0, crossed, front, back, fit_scale) == expect

@@ -114,7 +114,8 @@ def free_decay_check(diag) -> dict:
         fin = diag.final
         entry = {"valid": True, "why_not": None, "k": float(wave.k), "c": float(wave.c),
                  "k_ci": [float(v) for v in wave.k_ci], "c_ci": [float(v) for v in wave.c_ci],
-                 "amplitude_move": {q: float(v) for q, v in zip("kc", wave.amplitude_move)}}
+                 "amplitude_move": {q: float(v) for q, v in zip("kc", wave.amplitude_move)},
+                 "r2": float(wave.r2)}
         why_not = no_check
         if why_not is None and wave.r2 < MIN_DECAY_R2:   # a forced response, a progressive or coupled hub
             why_not = f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < {MIN_DECAY_R2})"

@@ -127,7 +127,10 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     leaves a few times the noise at most), the selection runs again from a
     timing searched with each axle's k scaled
     (:func:`~identification.diagnose.joint_start.rescue_start`), and the run
-    with the lower BIC is kept (``extra["rescue"]`` says which).
+    with the lower BIC is kept (``extra["rescue"]`` says which).  If the kept run still leaves that much,
+    the selection runs once more from the timings searched with the responses' common scale fitted
+    (``starting_values(..., fit_scale=True)``) where they differ, the lower BIC kept
+    (``extra["scaled_start"]``).
 
     Sensor signs the conditioning left open (a front channel read upside down or a pivoting axle; no
     quiet stretch before an impact) are settled by diagnosing each hypothesis and keeping the one of
@@ -196,7 +199,7 @@ def _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels) -> Trac
     pool = process_pool(workers)
     try:
         run = _select(pb, start0, effects, pool, tick, n, n_eff)
-        rescue = None
+        rescue = scaled = None
         if max(_residual_to_noise(run)) > RESCUE_RATIO and len(pb.channels) > 1:
             tick("rescue: starting values with scaled stiffness")
             start1 = rescue_start(pb, start0)
@@ -206,6 +209,20 @@ def _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels) -> Trac
                       "residual_to_noise_after": max(_residual_to_noise(second)), "kept": bool(better)}
             if better:
                 run, start0 = second, start1
+        if max(_residual_to_noise(run)) > RESCUE_RATIO:
+            # a model whose impact is too large for the data (a point contact on a wide, bevelled cleat)
+            # can place the arrivals where its responses cancel; the searches with the responses' scale
+            # fitted do not, but fail elsewhere (joint_timing's notes): from their timings too, where they
+            # differ, the lower BIC kept
+            start2 = starting_values(pb, fit_scale=True)
+            scaled = {"kept": False, "residual_to_noise_before": max(_residual_to_noise(run))}
+            if _timing_differs(start2, start0) or _timing_differs(start2["enveloped"], start0["enveloped"]):
+                tick("starting values with the responses' scale fitted")
+                third = _select(pb, start2, effects, pool, tick, n, n_eff)
+                scaled.update(kept=bool(_final_bic(third, n, n_eff) < _final_bic(run, n, n_eff)),
+                              residual_to_noise_after=max(_residual_to_noise(third)))
+                if scaled["kept"]:
+                    run, start0 = third, start2
     except BaseException:
         stop_pool(pool)
         raise
@@ -214,11 +231,19 @@ def _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels) -> Trac
     return TractorDiagnosis(problem=pb, effects=run["selected"], baseline=run["baseline"], final=run["final"],
                             rounds=run["rounds"], evidence=run["evidence"], unexplained=run["unexplained"],
                             seconds=time.perf_counter() - t0,
-                            extra={"n_eff": n_eff, "start": start0, "rescue": rescue})
+                            extra={"n_eff": n_eff, "start": start0, "rescue": rescue, "scaled_start": scaled})
 
 
 #: A channel residual over this many times its noise RMS after the selection triggers the rescue.
 RESCUE_RATIO = 10.0
+
+
+#: Timings (arrival, stagger, delay) further apart than this in some quantity are different starts, s.
+OTHER_TIMING_S = 0.005
+
+
+def _timing_differs(a: dict, b: dict) -> bool:
+    return any(abs(a[k] - b[k]) > OTHER_TIMING_S for k in ("arrival", "stagger", "delay") if k in a and k in b)
 
 
 def _residual_to_noise(run: dict) -> list:

@@ -45,7 +45,7 @@ def tire_start(pb: TractorProblem, tire: str) -> tuple[float, float]:
     return mass * wn * wn, 2 * 0.1 * mass * wn
 
 
-def starting_values(pb: TractorProblem) -> dict:
+def starting_values(pb: TractorProblem, *, fit_scale: bool = False) -> dict:
     """k, c per channel and the arrival, stagger and delay, from per-channel fits and a joint timing search.
 
     The timing (:func:`~identification.diagnose.joint_timing.joint_timing`) is
@@ -54,17 +54,18 @@ def starting_values(pb: TractorProblem) -> dict:
     (``enveloped_near``; with start values far off, the footprint's smooth
     response can fit a wrong timing better).  Models with ``enveloping``
     start from whichever fits them better.  ``body`` and ``enveloped["body"]`` name the body
-    hypothesis and dynamic indices that placed the arrivals best.
+    hypothesis and dynamic indices that placed the arrivals best.  With `fit_scale`, every search fits the
+    responses' common scale (:func:`~identification.diagnose.joint_timing.joint_timing`).
     """
     start = {}
     for tire in pb.channels:
         k, c = tire_start(pb, tire)
         start[f"k_{tire}"], start[f"c_{tire}"] = k, max(c, 50.0)
     # a pivoting front axle's roll mode misread as the front tires' own: a timing's scaled values, if any
-    start.update(joint_timing(pb, start, 0.0))
+    start.update(joint_timing(pb, start, 0.0, fit_scale=fit_scale))
     start.update(start.pop("front_tires", None) or {})
-    near = joint_timing(pb, start, ENVELOPE_GUESS_M, near=start)
-    start["enveloped"] = joint_timing(pb, start, ENVELOPE_GUESS_M)
+    near = joint_timing(pb, start, ENVELOPE_GUESS_M, near=start, fit_scale=fit_scale)
+    start["enveloped"] = joint_timing(pb, start, ENVELOPE_GUESS_M, fit_scale=fit_scale)
     start["enveloped_near"] = near
     for timing in (near, start["enveloped"]):
         start.update(timing.pop("front_tires", None) or {})

@@ -12,6 +12,19 @@ arrivals are therefore found with a linear model of the whole tractor:
   (exact for the linear model), and its squared misfit expands into
   correlations of the measurement with the responses (one per wheel and
   arrival) and of the responses with each other (one per pair and lag);
+* with ``fit_scale``, the responses carry one common scale, fitted in closed
+  form for every timing: the misfit less the measurement's energy is then
+  ``-L²/Q`` (``L`` the correlation of the measurement with the summed
+  responses, ``Q`` their energy; 0 where ``L <= 0``).  Without it, a model
+  whose impact is too large (a point contact on a wide, bevelled cleat) scores
+  every timing above the zero prediction and prefers the one whose responses
+  cancel each other (seen on another simulator's slow passes: a stagger of
+  -0.26 s for a true -0.01 s, both hubs' onsets at the same sample); with it,
+  start values far off let a wrong timing's shape tie the right one's (seen on
+  the rig: a stagger of -0.28 s for a true +0.05 s).  Neither search is
+  always right: the diagnosis runs from the fitted-scale timings too where its
+  first selection leaves the record unexplained, the lower BIC kept
+  (:func:`~identification.diagnose.joint_select.diagnose_tractor`);
 * the arrival, left/right stagger and front/rear delay are searched
   exhaustively, first on a ~2 ms grid, then at the sampling grid around the
   best; the hypothesis that fits best gives the timing.
@@ -121,25 +134,47 @@ def _responses(model: TractorFitModel, theta: dict, index: int, before: int, len
     return out
 
 
-def _coarse_min(energy, crossed, front, back):
-    """The first minimum, in (stagger, delay, arrival) order, of the coarse scores
-    ``energy + crossed[s, d] - 2 (front[s, i] + back[s, d + i])``: (score, s, d, i) indices, score inf if none
+def _scaled(lin, energy):
+    """The misfit less the measurement's energy with the responses' common scale fitted (>= 0): ``-L²/Q``
+    for the correlation ``L`` and the responses' energy ``Q``; 0 where ``L <= 0`` (the scale 0); inf where
+    ``L`` is not finite (an arrival outside the record)."""
+    lin, energy = np.asarray(lin, dtype=float), np.asarray(energy, dtype=float)
+    ok = (lin > 0) & (energy > 0)
+    out = np.where(ok, -np.square(np.where(ok, lin, 0.0)) / np.where(ok, energy, 1.0), 0.0)
+    return np.where(np.isfinite(lin), out, np.inf)
+
+
+def _score(lin, energy, fit_scale):
+    """The misfit less the measurement's energy: ``Q - 2 L``, or with `fit_scale` :func:`_scaled`'s."""
+    return _scaled(lin, energy) if fit_scale else np.asarray(energy - 2 * np.asarray(lin, dtype=float))
+
+
+def _coarse_min(energy, crossed, front, back, fit_scale):
+    """The first minimum, in (stagger, delay, arrival) order, of the coarse scores for
+    ``L = front[s, i] + back[s, d + i]`` and ``Q = energy + crossed[s, d]``: ``Q - 2 L`` (the responses as
+    they are), or with `fit_scale` :func:`_scaled`'s ``-L²/Q``: (score, s, d, i) indices, score inf if none
     is finite.  Compiled with numba (one pass, no temporaries; the same operations as the array form)."""
     best, bs, bd, bi = math.inf, 0, 0, 0
     for s in range(front.shape[0]):
         for d in range(crossed.shape[1]):
-            base = energy + crossed[s, d]
+            q = energy + crossed[s, d]
             for i in range(front.shape[1]):
-                v = base - 2 * (front[s, i] + back[s, d + i])
+                lin = front[s, i] + back[s, d + i]
+                if not fit_scale:
+                    v = q - 2 * lin
+                elif not math.isfinite(lin):
+                    continue
+                else:
+                    v = -(lin * lin) / q if lin > 0 and q > 0 else 0.0
                 if v < best:
                     best, bs, bd, bi = v, s, d, i
     return best, bs, bd, bi
 
 
-def _coarse_min_arrays(energy, crossed, front, back):
+def _coarse_min_arrays(energy, crossed, front, back, fit_scale):
     """:func:`_coarse_min` with numpy arrays (without numba)."""
     pos = np.arange(crossed.shape[1])[:, None] + np.arange(front.shape[1])[None, :]
-    sc = energy + crossed[:, :, None] - 2 * (front[:, None, :] + back[:, pos])
+    sc = _score(front[:, None, :] + back[:, pos], energy + crossed[:, :, None], fit_scale)
     j = int(np.argmin(np.where(np.isnan(sc), np.inf, sc)))
     return (float(sc.flat[j]),) + tuple(int(k) for k in np.unravel_index(j, sc.shape))
 
@@ -151,7 +186,8 @@ except ImportError:   # pragma: no cover - numba is a dependency
     _coarse_min = _coarse_min_arrays
 
 
-def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None) -> tuple[float, int, int, int]:
+def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None,
+            fit_scale: bool = False) -> tuple[float, int, int, int]:
     """Best (score, first arrival index, stagger, delay in samples) for responses `H`; with `near`
     ((arrival, stagger, delay) in samples, (arrival, stagger, delay) half-widths in samples) only there."""
     rec = pb.rec
@@ -197,6 +233,9 @@ def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None) -> tuple[
                    np.zeros(np.broadcast(s, d).shape))
 
     def score(i, s, d):   # arrays broadcast: i first arrival, s stagger, d delay (samples)
+        if fit_scale:
+            return _scaled(sum((at(w, i + right[w] * s + rear[w] * d) for w in range(m)), 0.0),
+                           energy + cross_at(s, d))
         total = energy + cross_at(s, d)
         for w in range(m):
             total = total - 2 * at(w, i + right[w] * s + rear[w] * d)
@@ -222,7 +261,7 @@ def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None) -> tuple[
                np.zeros((s_range.size, lattice.size)))
     back[:, lattice >= n] = -np.inf                                      # beyond the record
     crossed = cross_at(s_range[:, None], d_range[None, :])               # (stagger, delay)
-    value, si, di, ii = _coarse_min(float(energy), crossed, front, back)
+    value, si, di, ii = _coarse_min(float(energy), crossed, front, back, bool(fit_scale))
     best = (math.inf, 0, 0, 0)
     if math.isfinite(value):
         best = (float(value), int(i_range[ii]), int(s_range[si]), int(d_range[di]))
@@ -237,7 +276,7 @@ def _search(pb: TractorProblem, H: np.ndarray, before: int, near=None) -> tuple[
 
 
 def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypotheses=None,
-                 near: dict | None = None) -> dict:
+                 near: dict | None = None, fit_scale: bool = False) -> dict:
     """Arrival, stagger and delay of every channel at once, with the body's cross-talk.
 
     Parameters
@@ -254,6 +293,8 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
         within the footprint's passage time (at least NEAR_S), stagger and delay within NEAR_S.  A
         footprint moves every wheel's arrival alike; a search of its own would let start values that fit
         the point-contact response poorly pull the footprint's smoother response elsewhere.
+    fit_scale : bool
+        Fit the responses' common scale for every timing (see the module's notes).
 
     Returns
     -------
@@ -264,7 +305,7 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
         ``(effects, indices)``; ``front_tires`` (k, c of the front tires) when that hypothesis fitted best
         with the front tires' values scaled to a pivoting axle's roll mode (:func:`_tire_variants`);
         ``score``: the squared misfit less the measurement's energy (comparable between calls on one
-        problem).
+        problem with the same `fit_scale`).
     """
     rec = pb.rec
     fs, t = rec.sample_rate_hz, rec.time_s
@@ -289,7 +330,7 @@ def joint_timing(pb: TractorProblem, start: dict, footprint_m: float = 0.0, hypo
                 if name.startswith("footprint_"):
                     theta[name] = footprint_m
             H = _responses(model, theta, index, before, length)
-            found = _search(pb, H, before, window)
+            found = _search(pb, H, before, window, fit_scale)
             if best is None or found[0] < best[0][0]:
                 best = (found, (body, indices), scaled)
     (score, i, s, d), body, scaled = best
