@@ -110,6 +110,8 @@ def analyse(job) -> dict:
              "k_half": (d["k_ci"][1] - d["k_ci"][0]) / 2 / d["k"] if d.get("k_ci") else None,
              "at_noise": d.get("unexplained") is None, "source": d.get("k_source", "joint_fit"),
              "share": (d.get("unexplained") or {}).get("share", 0.0),
+             "worst_span_to_noise": (d.get("residual_test") or {}).get("worst_span_to_noise"),
+             "residual_to_noise": (d.get("residual_test") or {}).get("residual_to_noise"),
              "undetermined_flag": bool((d.get("free_decay_check") or {}).get("undetermined")),
              "k_range_in": bool((d.get("free_decay_check") or {}).get("k_range") and
                                 d["free_decay_check"]["k_range"][0] <= tt["k"] <= d["free_decay_check"]["k_range"][1]),

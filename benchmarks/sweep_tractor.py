@@ -112,10 +112,14 @@ def main(argv=None):
                             missed[f"{q}_{t}"] = round((p[f"{q}_{t}"] - truth["tires"][t][q]) / half, 2) if half \
                                 else "zero-width interval"
             left = [t for t, u in diag.unexplained.items() if u is not None]
+            tests = {t: diag.residual_test(t) for t in diag.channels}
+            ratios = {t: [round(v["residual_to_noise"], 2), round(v["worst_span_to_noise"], 2)]
+                      for t, v in tests.items()}
             rows.append(dict(setting=name, seed=seed, speed_kmh=round(over["speed_kmh"], 1),
                              rate_hz=over["sensor.rate_hz"], noise=round(over["sensor.noise_m_s2"], 3),
                              effects=diag.effects, right_model=right, k_err=round(k_err, 4), c_err=round(c_err, 4),
-                             index_err=round(idx_err, 4), unexplained=left, missed=missed, seconds=round(wall, 1)))
+                             index_err=round(idx_err, 4), unexplained=left, residual_to_noise=ratios, missed=missed,
+                             seconds=round(wall, 1)))
             print(json.dumps(rows[-1]), flush=True)
     n = len(cover["k"])
     print()
@@ -123,6 +127,11 @@ def main(argv=None):
           f"total {time.perf_counter() - t_all:.0f} s")
     print(f"worst |k| error {worst['k']:.2%} (accept 3 %), worst |c| error {worst['c']:.2%} (accept 10 %), "
           f"worst index error {worst['index']:.2%} (accept 10 %)")
+    tires = [v for r in rows for v in r["residual_to_noise"].values()]
+    print(f"tires at the noise floor (residual within 1.5x the noise over the window and 3x over every 0.1 s): "
+          f"{sum(w <= 1.5 and s <= 3.0 for w, s in tires)} of {len(tires)}; within 1.5x over the window alone: "
+          f"{sum(w <= 1.5 for w, _ in tires)}; worst stretch: median {np.median([s for _, s in tires]):.2f}x, "
+          f"largest {max(s for _, s in tires):.2f}x the noise")
     within = sum(r["k_err"] <= 0.03 and r["c_err"] <= 0.10 for r in rows)
     print(f"recordings with every k within 3 % and every c within 10 %: {within} of {len(rows)}")
     if n:

@@ -41,8 +41,12 @@ def _check(res, doc):
     assert {t: p.rsplit("/", 1)[-1] for t, p in out["fmus"].items()} == {t: f"rec_{t}.fmu" for t in TIRES}
     assert out["body"]["front_axle"] == doc["body"]["front_axle"]
     for tire, t in out["tires"].items():
-        assert set(t) == {"nrmse", "noise_nrmse", "residual_to_noise"}
+        assert set(t) == {"nrmse", "noise_nrmse", "residual_to_noise", "residual_test"}
         assert t["residual_to_noise"] < 1.5, (tire, t)
+        # the rig's model is the fitter's: no stretch of the residual above the noise either
+        test = t["residual_test"]
+        assert test["at_noise"] and test["worst_span_to_noise"] < 3.0, (tire, test)
+        assert test["residual_to_noise"] == pytest.approx(t["residual_to_noise"], rel=1e-9)
         assert t["residual_to_noise"] == pytest.approx(t["nrmse"] / t["noise_nrmse"], rel=1e-12)
         # the same FMU co-simulation as the diagnosis' gain check
         assert t["nrmse"] == pytest.approx(doc["tires"][tire]["nrmse_after"], rel=1e-6)

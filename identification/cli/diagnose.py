@@ -91,8 +91,10 @@ def _tractor_text(diag, gain, verbose: bool = False) -> str:
                  + (f", {speed['from_delay'] * 3.6:.2f} km/h from the front/rear delay" if speed["from_delay"] else ""))
     for tire, t in doc["tires"].items():
         left = t["unexplained"]
-        flag = (f"above the noise floor: residual {left['residual_to_noise']:.1f}x the noise, "
-                f"{percent(left['share'])} % of the signal energy left, in {left['window'][0]:.3f}-"
+        flag = (f"above the noise floor: residual {left['residual_to_noise']:.1f}x the noise"
+                + (f" ({left['worst_span_to_noise']:.1f}x over {left['worst_span'][0]:.2f}-{left['worst_span'][1]:.2f} s)"
+                   if "worst_span" in left else "") +
+                f", {percent(left['share'])} % of the signal energy left, in {left['window'][0]:.3f}-"
                 f"{left['window'][1]:.3f} s" if left else "residual at the noise floor")
         if left and left.get("steady_line"):
             flag += "; " + line_sentence(left["steady_line"])

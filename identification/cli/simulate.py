@@ -43,6 +43,7 @@ _KINDS = {"corners": "four independent corners", "sides": "one half-tractor per 
 def _tractor_text(sim, verbose: bool = False) -> str:
     from ..model.fitting import TIRE_EFFECTS
     from ..fmu.tractor_cosim import UNEXPLAINED_RATIO
+    from ..model.fitting import LOCAL_RATIO, LOCAL_SPAN_S
 
     body, pb = sim.body, sim.problem
     t = pb.rec.time_s[pb.window]
@@ -60,15 +61,19 @@ def _tractor_text(sim, verbose: bool = False) -> str:
     bad = []
     for tire in sim.channels:
         ratio = sim.residual_to_noise(tire)
-        verdict = "at the noise floor" if not sim.unexplained(tire) else \
-            f"NOT EXPLAINED: residual {ratio:.1f}x the noise (> {UNEXPLAINED_RATIO:g}x)"
+        test = sim.residual_test(tire)
+        verdict = "at the noise floor" if test["at_noise"] else \
+            f"NOT EXPLAINED: residual {ratio:.1f}x the noise (> {UNEXPLAINED_RATIO:g}x)" \
+            if ratio > UNEXPLAINED_RATIO else \
+            (f"NOT EXPLAINED: residual {test['worst_span_to_noise']:.1f}x the noise over "
+             f"{test['worst_span_s'][0]:.2f}-{test['worst_span_s'][1]:.2f} s (> {LOCAL_RATIO:g}x)")
         if sim.unexplained(tire):
             bad.append(tire)
         lines.append(f"  {tire:<4}{sim.nrmse[tire]:7.2%}{sim.noise_nrmse[tire]:11.2%}{ratio:11.2f}   {verdict}  "
                      f"[{sim.fmus[tire].name}]")
     if bad:
         lines.append(f"  the model does not explain the data in {', '.join(bad)}: the residual there is more than "
-                     f"{UNEXPLAINED_RATIO:g}x the noise")
+                     f"{UNEXPLAINED_RATIO:g}x the noise, or {LOCAL_RATIO:g}x over {LOCAL_SPAN_S:g} s")
     else:
         lines.append("  the model explains every channel to within the noise")
     if verbose:

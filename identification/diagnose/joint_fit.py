@@ -33,7 +33,7 @@ from scipy import optimize, stats
 from ..identify.waveform import long_run_variance_ratio
 from ..recording.condition import line_fit, refine_line
 from .joint_jacobian import FAILED, GroupedJacobian, channel_dependence
-from ..model.fitting import SIGNED, UNEXPLAINED_RATIO, TractorFitModel
+from ..model.fitting import LOCAL_RATIO, SIGNED, UNEXPLAINED_RATIO, TractorFitModel, residual_test
 
 
 def _exp(x: float) -> float:
@@ -329,12 +329,15 @@ def fit_tractor(model: TractorFitModel, start: dict, *, fixed: dict | None = Non
 
 
 def unexplained(problem, prediction: dict, channel: str, *, ratio: float = UNEXPLAINED_RATIO):
-    """What a model leaves unexplained in one channel, or None when its residual is at the noise floor.
+    """What a model leaves unexplained in one channel, or None when its residual is at the noise floor: its RMS
+    within `ratio` times the noise RMS over the window and within
+    :data:`~identification.model.fitting.LOCAL_RATIO` times it over every stretch of
+    :data:`~identification.model.fitting.LOCAL_SPAN_S` (:func:`~identification.model.fitting.residual_test`).
 
-    Returns ``{"share", "window", "residual_to_noise"}``: the residual energy
-    beyond the noise as a share of the signal energy over the diagnosis window,
-    and the time span [s, s] holding the middle 80 % of that excess energy; and
-    ``"steady_line"`` where a steady line of the channel's quiet stretch makes up
+    Returns ``{"share", "window", "residual_to_noise", "worst_span_to_noise", "worst_span"}``: the residual
+    energy beyond the noise as a share of the signal energy over the diagnosis window, the time span [s, s]
+    holding the middle 80 % of that excess energy, the RMS over the noise RMS, and the same over the worst
+    stretch with that stretch [s, s]; and ``"steady_line"`` where a steady line of the channel's quiet stretch makes up
     over :data:`LINE_SHARE` of the residual (:func:`residual_line`).
     """
     w = problem.window
@@ -343,7 +346,8 @@ def unexplained(problem, prediction: dict, channel: str, *, ratio: float = UNEXP
     r = (prediction[channel] - problem.measured[channel])[w]
     sigma = problem.noise[channel]
     rms = float(np.sqrt(np.mean(r ** 2)))
-    if rms <= ratio * sigma:
+    test = residual_test(r, sigma, problem.rec.sample_rate_hz, t)
+    if rms <= ratio * sigma and test["worst_span_to_noise"] <= LOCAL_RATIO:
         return None
     excess = np.clip(r ** 2 - sigma ** 2, 0.0, None)
     cum = np.cumsum(excess)
@@ -354,7 +358,8 @@ def unexplained(problem, prediction: dict, channel: str, *, ratio: float = UNEXP
     b = int(np.searchsorted(cum, 0.9 * total))
     share = (float(np.sum(r ** 2)) - sigma ** 2 * r.size) / float(np.sum(meas ** 2))
     out = {"share": float(max(share, 0.0)), "window": [float(t[a]), float(t[min(b, t.size - 1)])],
-           "residual_to_noise": rms / sigma}
+           "residual_to_noise": rms / sigma, "worst_span_to_noise": test["worst_span_to_noise"],
+           "worst_span": test["worst_span_s"]}
     line = problem.steady_lines.get(channel)
     if line and line.get("frequency_hz"):
         found = residual_line(t, r, float(line["frequency_hz"]))

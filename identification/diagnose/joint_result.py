@@ -114,6 +114,7 @@ class TractorDiagnosis:
                         "effects": list(self.effects), "parameters": self.tire_parameters(t),
                         "nrmse_before": float(before[t]), "nrmse_after": float(after[t]),
                         "noise_nrmse": self.noise_nrmse(t), "unexplained": self.unexplained[t],
+                        "residual_test": self.residual_test(t),
                         **({"free_decay_check": check} if check else {})}
         return {"recording": rec.source, "effects": list(self.effects),
                 "summary": effects_sentence({"effects": list(self.effects), "tires": tires}),
@@ -126,6 +127,17 @@ class TractorDiagnosis:
                 "acquisition": rec.acquisition.to_json() if rec.acquisition is not None else None,
                 "intervals": "conditional on the model: it leaves a residual above the noise floor"
                              if self.conditional else "the model explains the data to within noise"}
+
+    def residual_test(self, tire: str) -> dict:
+        """The final fit's residual in `tire`'s channel against its noise floor, over the window and over its
+        worst stretch (:func:`~identification.model.fitting.residual_test`; the stretch in s)."""
+        from ..model.fitting import residual_test
+
+        pb = self.problem
+        test = residual_test((self.final.prediction[tire] - pb.measured[tire])[pb.window], pb.noise[tire],
+                             pb.rec.sample_rate_hz, pb.rec.time_s[pb.window])
+        del test["worst_span"]
+        return test
 
     def speed_json(self) -> dict:
         """The speeds, m/s: the sidecar's, the impact onsets' (conditioning), the one analysed with, and the

@@ -30,7 +30,7 @@ from .cosim import TireFmu
 from .master import step_body_fmus
 from ..errors import InputError
 from ..model import Cleat, TractorModel
-from ..model.fitting import UNEXPLAINED_RATIO
+from ..model.fitting import UNEXPLAINED_RATIO, residual_test
 from ..recording.preprocess import DEFAULT_CUTOFF_HZ
 from ..recording import TIRES
 from ..model.scheme import Trajectory, _equilibrium_corner
@@ -244,15 +244,27 @@ class TractorSimulation:
     def residual_to_noise(self, tire: str) -> float:
         return self.nrmse[tire] / self.noise_nrmse[tire]
 
+    def residual_test(self, tire: str) -> dict:
+        """The co-simulated residual against the noise floor, over the window and its worst stretch
+        (:func:`~identification.model.fitting.residual_test`, the stretch in s)."""
+        pb = self.problem
+        test = residual_test((self.predicted[tire] - pb.measured[tire])[pb.window], pb.noise[tire],
+                             pb.rec.sample_rate_hz, pb.rec.time_s[pb.window])
+        del test["worst_span"]
+        return test
+
     def unexplained(self, tire: str) -> bool:
-        """The residual exceeds :data:`UNEXPLAINED_RATIO` times the noise: the model does not explain the data."""
-        return self.residual_to_noise(tire) > UNEXPLAINED_RATIO
+        """The residual exceeds :data:`UNEXPLAINED_RATIO` times the noise over the window, or
+        :data:`~identification.model.fitting.LOCAL_RATIO` times it over its worst stretch: the model does not
+        explain the data."""
+        return not self.residual_test(tire)["at_noise"]
 
     def to_json(self) -> dict:
         return {"recording": self.recording, "fmus": {t: str(p) for t, p in self.fmus.items()},
                 "body": dict(self.body),
                 "tires": {t: {"nrmse": self.nrmse[t], "noise_nrmse": self.noise_nrmse[t],
-                              "residual_to_noise": self.residual_to_noise(t)} for t in self.channels}}
+                              "residual_to_noise": self.residual_to_noise(t),
+                              "residual_test": self.residual_test(t)} for t in self.channels}}
 
 
 def simulate_tractor(fmu_paths, rec, body_doc, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ,

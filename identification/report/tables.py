@@ -86,7 +86,10 @@ def unexplained_flag(left: dict | None, nrmse: float, noise: float) -> str:
         return '<span class="ok">at the noise floor</span>'
     from ..diagnose.wording import line_sentence       # the diagnosis' words
     return (f'<span class="warn">above the noise floor: residual {left["residual_to_noise"]:.1f}× the noise '
-            f'(NRMSE {nrmse:.1%} against {noise:.1%}); the excess is {_share(left["share"])} of the signal energy, '
+            f'(NRMSE {nrmse:.1%} against {noise:.1%})'
+            + (f', {left["worst_span_to_noise"]:.1f}× over {left["worst_span"][0]:.2f}–{left["worst_span"][1]:.2f} s'
+               if "worst_span" in left else "")
+            + f'; the excess is {_share(left["share"])} of the signal energy, '
             f'{left["window"][0]:.2f}–{left["window"][1]:.2f} s'
             + (f'; {html.escape(line_sentence(left["steady_line"]))}' if left.get("steady_line") else "")
             + '; intervals conditional on the model</span>')
