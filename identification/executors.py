@@ -9,9 +9,11 @@ system), as the jobs read the recording and write the FMUs themselves.
 
 from __future__ import annotations
 
+import threading
+
 from .errors import InputError
 
-__all__ = ["LocalExecutor", "DaskExecutor", "executor_for", "ProgressBar"]
+__all__ = ["LocalExecutor", "DaskExecutor", "executor_for", "ProgressBar", "one_at_a_time"]
 
 
 class LocalExecutor:
@@ -94,12 +96,30 @@ class DaskExecutor:
         return False
 
     def map_unordered(self, fn, jobs):
+        from functools import partial
+
         from distributed import as_completed
-        futures = self._client.map(fn, list(jobs), pure=False)
+        futures = self._client.map(partial(one_at_a_time, fn), list(jobs), pure=False)
         for future in as_completed(futures, loop=self._client.loop):
             result = future.result()
             future.release()          # the cluster forgets each result once the parent has it
             yield result
+
+
+_JOB_LOCK = threading.Lock()
+
+
+def one_at_a_time(fn, job):
+    """``fn(job)``, one job at a time in this process whatever the threads of the Dask worker running it.
+
+    The jobs compile and step numba code and draw with matplotlib, which are not safe side by side in the
+    threads of one process: on CPython 3.11 a thread parsing source (numba's lowering) while another does
+    (matplotlib's or Dask's settings) fails with ``SystemError: AST constructor recursion depth mismatch``
+    (seen in CI on a worker of two threads).  The jobs hold the GIL, so the threads gained little; give a
+    worker processes (``dask worker --nworkers N --nthreads 1``) to run jobs side by side.
+    """
+    with _JOB_LOCK:
+        return fn(job)
 
 
 def executor_for(workers: int | None, scheduler: str | None = None):

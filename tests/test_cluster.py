@@ -68,3 +68,23 @@ def test_tires_keep_the_file_order_whatever_order_the_results_arrive_in(day, tmp
     result = batch.run_batch([tmp_path / "two.csv"], tmp_path / "out", workers=1, progress=False)
     from identification.recording import read_recording
     assert [t.tire for t in result.recordings[0].tires] == list(read_recording(tmp_path / "two.csv").tires)
+
+
+def _timed(job):
+    import time
+    start = time.perf_counter()
+    time.sleep(0.2)
+    return job, start, time.perf_counter()
+
+
+def test_a_threaded_worker_runs_one_job_at_a_time():
+    # numba's compilation and matplotlib side by side in one process's threads are not safe (CPython 3.11's
+    # AST race seen in CI): a worker of several threads runs the batch's jobs one after the other
+    from identification.executors import DaskExecutor
+
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=3, processes=False, dashboard_address=None) as cl:
+        with DaskExecutor(cl.scheduler_address) as ex:
+            spans = sorted((start, end) for _, start, end in ex.map_unordered(_timed, range(3)))
+    assert len(spans) == 3
+    for (_, end), (start, _) in zip(spans, spans[1:]):
+        assert start >= end, spans
