@@ -193,6 +193,10 @@ def test_ctrl_c_while_the_program_is_still_importing_ends_with_130_and_no_traceb
     before the program's first line runs, is Python's: a traceback of runpy or the signal, without a frame of
     the package.)"""
     answered = 0
+    began = time.monotonic()
+    whole = _cli(["identify", "--example", "7kmh"], tmp_path)
+    whole.communicate(timeout=120)
+    whole_s = time.monotonic() - began     # the whole command on this machine, under its present load
     for after_s in (0.04, 0.06, 0.08, 0.1, 0.15, 0.3):
         proc = _cli(["identify", "--example", "7kmh"], tmp_path)
         time.sleep(after_s)
@@ -200,8 +204,10 @@ def test_ctrl_c_while_the_program_is_still_importing_ends_with_130_and_no_traceb
         sent = time.monotonic()
         stdout, stderr = proc.communicate(timeout=60)
         # answered at once, not at the end of the imports under way (seen: 20-25 s, the whole command, when
-        # every frame beneath an import counted as fragile)
-        assert time.monotonic() - sent < 10.0, (after_s, time.monotonic() - sent)
+        # every frame beneath an import counted as fragile); at once is under 10 s, or under half the whole
+        # command where a loaded machine (CI's two test workers) slows the imports themselves (seen: 10.01 s)
+        waited = time.monotonic() - sent
+        assert waited < max(10.0, 0.5 * whole_s), (after_s, waited, whole_s)
         if "Traceback" in stderr:       # the interpreter's own start-up, before the program's first line
             assert "identification" not in stderr, (after_s, stderr)
             continue
