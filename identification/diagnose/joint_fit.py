@@ -345,9 +345,8 @@ def unexplained(problem, prediction: dict, channel: str, *, ratio: float = UNEXP
     meas = problem.measured[channel][w]
     r = (prediction[channel] - problem.measured[channel])[w]
     sigma = problem.noise[channel]
-    rms = float(np.sqrt(np.mean(r ** 2)))
     test = residual_test(r, sigma, problem.rec.sample_rate_hz, t)
-    if rms <= ratio * sigma and test["worst_span_to_noise"] <= LOCAL_RATIO:
+    if test["residual_to_noise"] <= ratio and test["worst_span_to_noise"] <= LOCAL_RATIO:
         return None
     excess = np.clip(r ** 2 - sigma ** 2, 0.0, None)
     cum = np.cumsum(excess)
@@ -358,7 +357,7 @@ def unexplained(problem, prediction: dict, channel: str, *, ratio: float = UNEXP
     b = int(np.searchsorted(cum, 0.9 * total))
     share = (float(np.sum(r ** 2)) - sigma ** 2 * r.size) / float(np.sum(meas ** 2))
     out = {"share": float(max(share, 0.0)), "window": [float(t[a]), float(t[min(b, t.size - 1)])],
-           "residual_to_noise": rms / sigma, "worst_span_to_noise": test["worst_span_to_noise"],
+           "residual_to_noise": test["residual_to_noise"], "worst_span_to_noise": test["worst_span_to_noise"],
            "worst_span": test["worst_span_s"]}
     line = problem.steady_lines.get(channel)
     if line and line.get("frequency_hz"):

@@ -131,13 +131,7 @@ class TractorDiagnosis:
     def residual_test(self, tire: str) -> dict:
         """The final fit's residual in `tire`'s channel against its noise floor, over the window and over its
         worst stretch (:func:`~identification.model.fitting.residual_test`; the stretch in s)."""
-        from ..model.fitting import residual_test
-
-        pb = self.problem
-        test = residual_test((self.final.prediction[tire] - pb.measured[tire])[pb.window], pb.noise[tire],
-                             pb.rec.sample_rate_hz, pb.rec.time_s[pb.window])
-        del test["worst_span"]
-        return test
+        return self.problem.residual_test(self.final.prediction[tire], tire)
 
     def speed_json(self) -> dict:
         """The speeds, m/s: the sidecar's, the impact onsets' (conditioning), the one analysed with, and the

@@ -30,7 +30,7 @@ from .cosim import TireFmu
 from .master import step_body_fmus
 from ..errors import InputError
 from ..model import Cleat, TractorModel
-from ..model.fitting import UNEXPLAINED_RATIO, residual_test
+from ..model.fitting import UNEXPLAINED_RATIO
 from ..recording.preprocess import DEFAULT_CUTOFF_HZ
 from ..recording import TIRES
 from ..model.scheme import Trajectory, _equilibrium_corner
@@ -247,11 +247,7 @@ class TractorSimulation:
     def residual_test(self, tire: str) -> dict:
         """The co-simulated residual against the noise floor, over the window and its worst stretch
         (:func:`~identification.model.fitting.residual_test`, the stretch in s)."""
-        pb = self.problem
-        test = residual_test((self.predicted[tire] - pb.measured[tire])[pb.window], pb.noise[tire],
-                             pb.rec.sample_rate_hz, pb.rec.time_s[pb.window])
-        del test["worst_span"]
-        return test
+        return self.problem.residual_test(self.predicted[tire], tire)
 
     def unexplained(self, tire: str) -> bool:
         """The residual exceeds :data:`UNEXPLAINED_RATIO` times the noise over the window, or

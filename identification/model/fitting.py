@@ -175,6 +175,14 @@ class TractorProblem:
     def axles(self) -> tuple:
         return tuple(a for a in ("front", "rear") if any(axle_of(t) == a for t in self.channels))
 
+    def residual_test(self, prediction, channel: str) -> dict:
+        """`prediction` of `channel` (whole record, low-passed) against its noise floor over the window and its
+        worst stretch (:func:`residual_test`, the stretch in s as ``worst_span_s``)."""
+        test = residual_test((prediction - self.measured[channel])[self.window], self.noise[channel],
+                             self.rec.sample_rate_hz, self.rec.time_s[self.window])
+        del test["worst_span"]
+        return test
+
     def available(self, effect: str, effects=()) -> bool:
         """Whether `effect` can be added to a model with `effects` for these channels."""
         chosen = set(effects)
