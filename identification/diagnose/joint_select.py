@@ -96,6 +96,13 @@ def _try(job):
         # timing's scan 2x the wrong one's, its fit 400x lower): fit every option
         fits = [fit_tractor(model, s, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET) for s in options]
         fit = min(fits, key=lambda f: (not f.in_bounds, f.weighted_sse()))
+    elif "lift_off" in new:
+        # a wheel that flies lands later: the current model's timing and tires (fitted with a tire that pulls the
+        # hub down) may hold the unilateral fit in a worse minimum; fit from the waveform fits as well
+        fresh = dict(start, **{n: start0[n] for n in model.names if n[:2] in ("k_", "c_")},
+                     **{n: start0[n] for n in ("arrival", "stagger", "delay") if n in model.names})
+        fits = [fit_tractor(model, s, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET) for s in (start, fresh)]
+        fit = min(fits, key=lambda f: (not f.in_bounds, f.weighted_sse()))
     else:
         fit = fit_tractor(model, start, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET)
     checks = [check_tractor(effect, fit, current) for effect in new]
