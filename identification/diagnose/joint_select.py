@@ -80,6 +80,12 @@ def _candidate_start(model: TractorFitModel, current: TractorFit, start0: dict) 
     return {name: s[name] for name in model.names}
 
 
+def _waveform_start(model: TractorFitModel, start: dict, start0: dict, timing: dict) -> dict:
+    """`start` with every tire's k and c from its waveform fit (`start0`) and the arrivals of `timing`."""
+    return dict(start, **{n: start0[n] for n in model.names if n[:2] in ("k_", "c_")},
+                **{n: timing[n] for n in ("arrival", "stagger", "delay") if n in model.names})
+
+
 def _try(job):
     effects, current, new, start0 = job
     model = TractorFitModel(effects, current.model.problem)
@@ -88,23 +94,18 @@ def _try(job):
         # the current model's k (and timing) absorb the motion it lacks: scan around them and around the
         # waveform fits with the timing found under a coupled body
         timings = enveloped_timings(start0) if "enveloping" in model.effects else [start0]
-        fresh = [dict(start, **{n: start0[n] for n in model.names if n[:2] in ("k_", "c_")},
-                      **{n: timing[n] for n in ("arrival", "stagger", "delay") if n in model.names})
-                 for timing in timings]
-        options = [body_start(model, s, step_s=SCREEN_STEP_S) for s in [start] + fresh]
+        options = [body_start(model, s, step_s=SCREEN_STEP_S)
+                   for s in [start] + [_waveform_start(model, start, start0, timing) for timing in timings]]
         # a scan cannot tell a wrong timing from a right one while the tires are still off (seen: the right
         # timing's scan 2x the wrong one's, its fit 400x lower): fit every option
-        fits = [fit_tractor(model, s, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET) for s in options]
-        fit = min(fits, key=lambda f: (not f.in_bounds, f.weighted_sse()))
     elif "lift_off" in new:
         # a wheel that flies lands later: the current model's timing and tires (fitted with a tire that pulls the
         # hub down) may hold the unilateral fit in a worse minimum; fit from the waveform fits as well
-        fresh = dict(start, **{n: start0[n] for n in model.names if n[:2] in ("k_", "c_")},
-                     **{n: start0[n] for n in ("arrival", "stagger", "delay") if n in model.names})
-        fits = [fit_tractor(model, s, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET) for s in (start, fresh)]
-        fit = min(fits, key=lambda f: (not f.in_bounds, f.weighted_sse()))
+        options = [start, _waveform_start(model, start, start0, start0)]
     else:
-        fit = fit_tractor(model, start, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET)
+        options = [start]
+    fits = [fit_tractor(model, s, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET) for s in options]
+    fit = min(fits, key=lambda f: (not f.in_bounds, f.weighted_sse()))
     checks = [check_tractor(effect, fit, current) for effect in new]
     local = local_gain(new[0], fit, current) if len(new) == 1 else None
     return TractorCandidate("+".join(new), fit, math.nan, math.nan, all(ok for ok, _ in checks), False,
