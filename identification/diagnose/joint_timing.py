@@ -38,9 +38,8 @@ import math
 import numpy as np
 from scipy.signal import fftconvolve
 
-from ..model.acquisition import sensed_acceleration
 from ..model.kernels import run_model
-from ..recording.preprocess import lowpass
+from ..model.sensing import sensed_lowpassed
 from ..recording import FRONT_TIRES
 from ..model.fitting import TractorFitModel, TractorProblem
 
@@ -126,11 +125,9 @@ def _responses(model: TractorFitModel, theta: dict, index: int, before: int, len
         record = dataclasses.replace(base, arrivals_s=arrivals)
         traj = run_model(record, *record.grid(float(t[index]) - (before / fs) - 0.1, float(t[stop - 1]) + 0.01,
                                               _STEP_S, 1.0 / fs))
-        for c in range(m):
-            y = lowpass(sensed_acceleration(traj, c, t[:stop], fs, rec.acquisition), sample_rate_hz=fs,
-                        cutoff_hz=pb.cutoff_hz)
-            seg = y[index - before:stop]
-            out[w, c, :seg.size] = seg
+        y = sensed_lowpassed(traj, t[:stop], fs, rec.acquisition, cutoff_hz=pb.cutoff_hz, tires=m)
+        seg = y[:, index - before:stop]
+        out[w, :, :seg.shape[1]] = seg
     return out
 
 

@@ -208,7 +208,13 @@ def _smooth(v, grid, h, te, je):
 
 def _impulse_sums(te, je):
     """Impulse times sorted (stable), prefix sums of their jumps (Σ_{t_e <= x} j_e = cum[count]), the order."""
-    order = np.argsort(te, kind="mergesort")
+    order = np.arange(te.size)
+    for i in range(1, te.size):   # a stable insertion sort (a tire's few impulses; numba's mergesort costs
+        o, j = order[i], i        # more to compile than the whole chain)
+        while j > 0 and te[order[j - 1]] > te[o]:
+            order[j] = order[j - 1]
+            j -= 1
+        order[j] = o
     ts = te[order]
     cum = np.zeros(te.size + 1)
     for i in range(te.size):
