@@ -86,6 +86,7 @@ def test_the_free_decay_of_a_rigid_body_returns_every_tire_s_k_and_c():
         assert lo <= 1.0 <= hi
 
 
+@pytest.mark.sweep
 def test_the_free_decay_s_95_percent_intervals_hold_k_and_c_about_95_percent_of_the_time():
     held = total = 0
     for seed in range(10, 22):

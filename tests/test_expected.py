@@ -81,6 +81,7 @@ def _rides(seeds, duration, road_class="C"):
     return out
 
 
+@pytest.mark.sweep
 def test_monte_carlo_mean_square_matches_the_psd_within_its_standard_error():
     """√(mean a_w²) over 16 rides of 240 s against the PSD's √E[a_w²]; the tolerance is three standard errors
     of the Monte-Carlo estimate (from the rides' own scatter) plus 0.5 % for the road grid's interpolation
@@ -97,6 +98,7 @@ def test_monte_carlo_mean_square_matches_the_psd_within_its_standard_error():
     assert standard_error < 0.02                       # the check has teeth: 3 SE stays below 6 %
 
 
+@pytest.mark.sweep
 def test_single_ride_interval_covers_fresh_roads_as_often_as_stated():
     """The 95 % single-ride interval from the default 10 realisations (60 s) against 30 further roads: with
     a true coverage of 95 % the count inside is Binomial(30, 0.95), P(count <= 24) = 0.3 %; the test asks

@@ -23,6 +23,8 @@ import math
 import zipfile
 
 import pytest
+
+pytestmark = pytest.mark.fuzz   # its own CI step (pytest -m fuzz), left out of the default run
 from native_fixtures import native_fmus  # noqa: F401
 
 hypothesis = pytest.importorskip("hypothesis")

@@ -140,6 +140,7 @@ COVERAGE_DRAW = {
     "enveloping.footprint_rear_m": 0.4082960998185291}
 
 
+@pytest.mark.sweep
 def test_intervals_cover_the_truth_for_90_percent_of_48_pairs():
     """Twelve recordings of one rigid tractor on enveloping tires (only the noise differs), each diagnosed
     alone: the right model every time, and the 95 % intervals of k and c both hold the truth for >= 90 % of
