@@ -101,6 +101,21 @@ def demo_run(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
+def example_diagnosis(tmp_path_factory):
+    """The embedded 7 km/h day's ``diagnose --json`` document as a file, once per test process: ``ride --body``
+    takes it, so the rides whose subject is not the diagnosis do not diagnose the day again."""
+    import contextlib
+    import io
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["diagnose", "--example", "7kmh", "--json"]) == 0
+    path = tmp_path_factory.mktemp("diagnosis") / "diag.json"
+    path.write_text(out.getvalue())
+    return path
+
+
+@pytest.fixture(scope="session")
 def demo(demo_run):
     """The demo's exit status and folder."""
     return demo_run[:2]

@@ -12,7 +12,6 @@ which shares no code with the fitter.
 
 from __future__ import annotations
 
-import json
 import warnings
 
 import pytest
@@ -21,21 +20,12 @@ pytest.importorskip("exudyn", reason="the independent simulator needs exudyn (th
 warnings.filterwarnings("ignore", category=DeprecationWarning, module="exudyn")
 
 from identification.diagnose.joint_select import diagnose_tractor  # noqa: E402
-from identification.recording import read_recording  # noqa: E402
-from identification.recording.preprocess import default_cutoff_hz  # noqa: E402
-from identification.recording.window import decimate, focus  # noqa: E402
+from tests.independent_cases import independent_recording  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def flying_fronts(tmp_path_factory):
-    from tests.independent.generate import draw, run, write
-
-    sc = draw("corners point", 151)
-    stem = write(sc, run(sc), tmp_path_factory.mktemp("independent") / "corners_point_151")
-    truth = json.loads(stem.with_suffix(".truth.json").read_text())
-    rec = read_recording(stem.with_suffix(".csv"))
-    cutoff = default_cutoff_hz(rec.sample_rate_hz)
-    rec = decimate(focus(rec, cutoff_hz=cutoff, announce=False), cutoff_hz=cutoff)
+    rec, cutoff, truth = independent_recording("corners point", 151, tmp_path_factory.mktemp("independent"))
     return diagnose_tractor(rec, cutoff_hz=cutoff), truth
 
 

@@ -70,20 +70,10 @@ def test_rides_with_footprints_match_the_road_psd_through_the_footprint_response
     assert predicted < 0.9 * point                      # the footprints matter here: the check has teeth
 
 
-@pytest.fixture(scope="module")
-def diagnosis(tmp_path_factory):
+@pytest.fixture
+def diagnosis(example_diagnosis):
     """The embedded 7 km/h day's ``diagnose --json`` document, as a file (``ride --body`` takes it)."""
-    import contextlib
-    import io
-
-    from identification.cli import main
-
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
-        assert main(["diagnose", "--example", "7kmh", "--json"]) == 0
-    path = tmp_path_factory.mktemp("diagnosis") / "diag.json"
-    path.write_text(out.getvalue())
-    return path
+    return example_diagnosis
 
 
 def test_ride_command_rolls_the_tires_on_the_diagnosed_footprints(cli, tmp_path, diagnosis):

@@ -248,11 +248,12 @@ def test_ride_road_options_that_do_not_fit_end_in_one_line(cli, tmp_path, args, 
     assert r.code == 2 and r.err.startswith(f"cleatfmu: error: {source}: ") and r.err.count("\n") == 1, r.err
 
 
-def test_ride_saves_its_road_and_rides_the_saved_road_to_the_same_a_w(cli, tmp_path):
+def test_ride_saves_its_road_and_rides_the_saved_road_to_the_same_a_w(cli, tmp_path, example_diagnosis):
     """``ride --save-road`` writes seed's generated road (class coherence here, the first of two realisations);
     ``ride --road-file`` on that file gives every set the same a_w, the class reported as 'file'."""
     saved = tmp_path / "out" / "road.crg"
-    common = ("ride", "--example", "7kmh", "--compare", "final", "--duration-s", "10", "--json", "--workers", "1")
+    common = ("ride", "--example", "7kmh", "--compare", "final", "--duration-s", "10", "--json", "--workers", "1",
+              "--body", example_diagnosis)
     first = cli(*common, "--road", "D", "--coherence", "class", "--realisations", "2", "--save-road", saved)
     assert first.code == 0, first.err
     again = cli(*common, "--road-file", saved)

@@ -11,7 +11,6 @@ independent engine's scenario (its cleats' positions and speed), which shares no
 
 from __future__ import annotations
 
-import json
 import warnings
 
 import pytest
@@ -21,24 +20,15 @@ warnings.filterwarnings("ignore", category=DeprecationWarning, module="exudyn")
 
 from identification.diagnose.joint_start import starting_values  # noqa: E402
 from identification.model.fitting import TractorProblem  # noqa: E402
-from identification.recording import read_recording  # noqa: E402
-from identification.recording.preprocess import default_cutoff_hz  # noqa: E402
-from identification.recording.window import decimate, focus  # noqa: E402
+from tests.independent_cases import independent_recording  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def slow_wide_cleat(tmp_path_factory):
-    from tests.independent.generate import draw, run, write
-
-    sc = draw("corners", 132)
-    stem = write(sc, run(sc), tmp_path_factory.mktemp("independent") / "corners_132")
-    truth = json.loads(stem.with_suffix(".truth.json").read_text())["scenario"]
-    rec = read_recording(stem.with_suffix(".csv"))
-    cutoff = default_cutoff_hz(rec.sample_rate_hz)
-    rec = decimate(focus(rec, cutoff_hz=cutoff, announce=False), cutoff_hz=cutoff)
+    rec, cutoff, truth = independent_recording("corners", 132, tmp_path_factory.mktemp("independent"))
     pb = TractorProblem.from_recording(rec, cutoff_hz=cutoff)
-    speed = truth["speed_kmh"] / 3.6
-    return pb, {"stagger": truth["stagger_m"] / speed}
+    speed = truth["scenario"]["speed_kmh"] / 3.6
+    return pb, {"stagger": truth["scenario"]["stagger_m"] / speed}
 
 
 def test_the_fitted_scale_search_finds_the_stagger_the_plain_one_misses(slow_wide_cleat):

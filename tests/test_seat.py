@@ -264,11 +264,11 @@ def test_bad_seat_files_and_options_end_in_one_line_exit_2(cli, seat_file, text,
         assert r.code == 2 and r.err.count("\n") == 1 and str(path) in r.err and problem in r.err, r.err
 
 
-def test_ride_seat_on_the_embedded_example(cli, seat_file):
+def test_ride_seat_on_the_embedded_example(cli, seat_file, example_diagnosis):
     """``ride --seat`` on the 7 km/h day: a 1 Hz seat isolates the floor (SEAT < 1); x and y are the floor's."""
     path = seat_file(json.dumps({"stiffness_N_per_m": 3600, "damping_N_s_per_m": 340}))
     r = cli("ride", "--example", "7kmh", "--compare", "final", "--duration-s", "20", "--realisations", "1",
-            "--seat", path, "--workers", "1", "--json")
+            "--seat", path, "--workers", "1", "--json", "--body", example_diagnosis)
     assert r.code == 0, r.err
     doc = json.loads(r.out)
     entry = doc["sets"]["final"]
