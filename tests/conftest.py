@@ -101,18 +101,24 @@ def demo_run(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
-def example_diagnosis(tmp_path_factory):
-    """The embedded 7 km/h day's ``diagnose --json`` document as a file, once per test process: ``ride --body``
-    takes it, so the rides whose subject is not the diagnosis do not diagnose the day again."""
+def example_diagnosis_run(tmp_path_factory):
+    """``cleatfmu diagnose --example 7kmh --json`` once per test process: the document as a file, and stderr."""
     import contextlib
     import io
 
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         assert main(["diagnose", "--example", "7kmh", "--json"]) == 0
     path = tmp_path_factory.mktemp("diagnosis") / "diag.json"
     path.write_text(out.getvalue())
-    return path
+    return path, err.getvalue()
+
+
+@pytest.fixture(scope="session")
+def example_diagnosis(example_diagnosis_run):
+    """The embedded 7 km/h day's ``diagnose --json`` document as a file: ``ride --body`` takes it, so the rides
+    whose subject is not the diagnosis do not diagnose the day again."""
+    return example_diagnosis_run[0]
 
 
 @pytest.fixture(scope="session")
