@@ -22,3 +22,16 @@ def independent_recording(setting: str, seed: int, folder: Path):
     rec = read_recording(stem.with_suffix(".csv"))
     cutoff = default_cutoff_hz(rec.sample_rate_hz)
     return decimate(focus(rec, cutoff_hz=cutoff, announce=False), cutoff_hz=cutoff), cutoff, truth
+
+
+def assert_tires_hold_the_truth(diagnosis, truth, *, c_interval: bool = False) -> None:
+    """Every tire of `diagnosis` within the issue's 3 % of the truth's k and 10 % of its c, its k interval
+    holding the truth's k (and its c interval the truth's c, with `c_interval`)."""
+    reported = diagnosis.to_json()["tires"]
+    for w, t in truth["tires"].items():
+        got = reported[w]
+        assert abs(got["k"] / t["k"] - 1) < 0.03, (w, got["k"], t["k"])
+        assert abs(got["c"] / t["c"] - 1) < 0.10, (w, got["c"], t["c"])
+        assert got["k_ci"][0] <= t["k"] <= got["k_ci"][1], (w, got["k_ci"], t["k"])
+        if c_interval:
+            assert got["c_ci"][0] <= t["c"] <= got["c_ci"][1], (w, got["c_ci"], t["c"])

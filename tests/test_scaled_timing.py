@@ -17,6 +17,7 @@ import pytest
 
 pytest.importorskip("exudyn", reason="the independent simulator needs exudyn (the test extra)")
 warnings.filterwarnings("ignore", category=DeprecationWarning, module="exudyn")
+pytestmark = pytest.mark.independent   # generated and diagnosed: CI's sweeps step (docs/testing.md)
 
 from identification.diagnose.joint_start import starting_values  # noqa: E402
 from identification.model.fitting import TractorProblem  # noqa: E402

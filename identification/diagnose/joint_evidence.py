@@ -17,7 +17,10 @@
                         independent corners, and a gain there is a better fit of the current model;
 ``front_axle_pivot``    the front-axle roll index is identified (interval within a factor 10) and the front
                         channels' residual falls by ≥ 25 %;
-``nonlinear_stiffness`` the exponent differs from 1 by ≥ 0.08, its interval excluding 1;
+``nonlinear_stiffness`` the exponent differs from 1 by ≥ 0.08, its interval excluding 1; on independent
+                        corners not refuted by the channels' own free decays where any counts
+                        (:func:`~identification.diagnose.decay_shape.exponent_evidence`: their second harmonic's
+                        exponent, pooled, must lie on the same side of 1 by ≥ 0.08, its interval excluding 1);
 ``friction_damping``    a friction force ≥ 30 N, its interval excluding 0; on independent corners (no body
                         named) not refuted by the channels' own free decays: where two or more of them
                         ring long enough to tell (:func:`viscous_decays`) and every one of those decays
@@ -28,8 +31,10 @@
 
 Where an effect acts on a narrow part of the data, :func:`local_gain` measures it there as well: for
 ``periodic_disturbance`` the share of the line's energy (in the channel where the line is strongest)
-that the extended model removes.  The selection accepts a candidate on that share when the rest of the
-residual (a footprint of another shape, say) is too large for the overall gain to show a steady line.
+that the extended model removes; for ``nonlinear_stiffness`` the share of the free decays' in-phase second
+harmonic (:func:`~identification.diagnose.decay_shape.harmonic_share`).  The selection accepts a candidate on
+that share when the rest of the residual (a footprint of another shape, say) is too large for the overall
+gain to show a steady line or a progressive law.
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ import numpy as np
 from ..recording.condition import ENGINE_BAND_HZ
 from ..recording import FRONT_TIRES, STANDARD_GRAVITY
 from ..model.fitting import BODY_EFFECTS, axle_of
+from .decay_shape import exponent_evidence, free_decays, harmonic_share, pooled_text
 from .joint_fit import TractorFit
 
 __all__ = ["check_tractor", "final_evidence", "contact_losses", "interval_text", "local_gain", "viscous_decays"]
@@ -237,9 +243,17 @@ def _pivot(fit, base):
 def _nonlinear(fit, base):
     lo, hi = fit.ci["exponent"]
     n = fit.params["exponent"]
-    return abs(n - 1.0) >= 0.08 and not (lo <= 1.0 <= hi), (
-        f"stiffness exponent {_ci(fit, 'exponent', '.2f')}: the elastic force grows as deflection^{n:.2f}, so "
-        f"the period changes with amplitude")
+    text = (f"stiffness exponent {_ci(fit, 'exponent', '.2f')}: the elastic force grows as deflection^{n:.2f}, so "
+            f"the period changes with amplitude")
+    ok = abs(n - 1.0) >= 0.08 and not (lo <= 1.0 <= hi)
+    verdict, pooled, est = exponent_evidence(fit.model.problem, fit.model.effects)
+    if verdict == "no decay":
+        return ok, text
+    said = pooled_text(pooled, est)
+    if verdict != ("progressive" if n > 1.0 else "degressive"):
+        return False, (f"{text}; refuted by the free decays: their second harmonic (in phase with the square of "
+                       f"the fundamental, which an elastic law that is not linear adds) gives {said}")
+    return ok, f"{text}; the free decays' second harmonic agrees: {said}"
 
 
 def _friction(fit, base):
@@ -272,17 +286,8 @@ VISCOUS_RATIO = (0.8, 1.25)
 def viscous_decays(pb) -> tuple[list, dict]:
     """(channels whose own free decay spans :data:`MIN_DECAY_CYCLES` cycles and falls :data:`MIN_DECAY_FALL`x,
     {those of them that decay viscously: their ``WaveformResult.envelope_ratio``})."""
-    from ..errors import InputError
-    from ..identify.waveform import identify_waveform
-    from ..recording.preprocess import preprocess
-
     long, viscous = [], {}
-    for tire in pb.channels:
-        try:
-            sig = preprocess(pb.rec, [tire], cutoff_hz=pb.cutoff_hz, min_peaks=1)[tire]
-            res = identify_waveform(sig, pb.rec.mass_kg(tire), source=pb.rec.source)
-        except (InputError, ValueError, FloatingPointError, np.linalg.LinAlgError):
-            continue
+    for tire, (_, res) in free_decays(pb).items():
         span = res.window_s[1] - res.window_s[0]
         if span / res.T < MIN_DECAY_CYCLES or -res.decay_rate * span < math.log(MIN_DECAY_FALL):
             continue
@@ -318,7 +323,11 @@ def _line_removed(fit, base, line=None) -> float:
 def local_gain(effect: str, fit: TractorFit, base: TractorFit) -> float | None:
     """Share of what `base` leaves unexplained that `fit` removes where `effect` acts, or None for an
     effect judged on the whole residual alone (see the module's text)."""
-    return _line_removed(fit, base) if effect == "periodic_disturbance" else None
+    if effect == "periodic_disturbance":
+        return _line_removed(fit, base)
+    if effect == "nonlinear_stiffness":
+        return harmonic_share(fit, base)
+    return None
 
 
 def _periodic(fit, base):
