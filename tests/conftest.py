@@ -86,32 +86,34 @@ def rewrite_sidecar(csv_path: Path, **changes) -> None:
     meta_path.write_text(json.dumps(meta))
 
 
-@pytest.fixture(scope="session")
-def demo_run(tmp_path_factory):
-    """``cleatfmu demo`` into a folder whose parents do not exist yet, once per test process: exit status,
-    folder, stdout (``tests/test_report.py``, ``tests/test_report_files.py``)."""
-    import contextlib
-    import io
-
-    out = tmp_path_factory.mktemp("demo") / "new" / "deeper" / "out"
-    stdout = io.StringIO()
-    with contextlib.redirect_stdout(stdout):
-        code = main(["demo", "--out", str(out), "--workers", "2"])
-    return code, out, stdout.getvalue()
-
-
-@pytest.fixture(scope="session")
-def example_diagnosis_run(tmp_path_factory):
-    """``cleatfmu diagnose --example 7kmh --json`` once per test process: the document as a file, and stderr."""
+def _run_main(argv):
+    """`main(argv)` with stdout and stderr captured: (exit status, stdout, stderr)."""
     import contextlib
     import io
 
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        assert main(["diagnose", "--example", "7kmh", "--json"]) == 0
+        code = main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="session")
+def demo_run(tmp_path_factory):
+    """``cleatfmu demo`` into a folder whose parents do not exist yet, once per test process: exit status,
+    folder, stdout (``tests/test_report.py``, ``tests/test_report_files.py``)."""
+    out = tmp_path_factory.mktemp("demo") / "new" / "deeper" / "out"
+    code, stdout, _ = _run_main(["demo", "--out", str(out), "--workers", "2"])
+    return code, out, stdout
+
+
+@pytest.fixture(scope="session")
+def example_diagnosis_run(tmp_path_factory):
+    """``cleatfmu diagnose --example 7kmh --json`` once per test process: the document as a file, and stderr."""
+    code, out, err = _run_main(["diagnose", "--example", "7kmh", "--json"])
+    assert code == 0
     path = tmp_path_factory.mktemp("diagnosis") / "diag.json"
-    path.write_text(out.getvalue())
-    return path, err.getvalue()
+    path.write_text(out)
+    return path, err
 
 
 @pytest.fixture(scope="session")
