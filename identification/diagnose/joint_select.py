@@ -115,9 +115,11 @@ def _try(job):
     elif "lift_off" in new:
         # a wheel that flies lands later: the current model's timing and tires (fitted with a tire that pulls the
         # hub down) may hold the unilateral fit in a worse minimum; fit from the waveform fits as well, with
-        # the timing found by bilateral responses and with the one the unilateral responses place best
-        options = [start, _waveform_start(model, start, start0, start0),
-                   _waveform_start(model, start, start0, _flying_timing(model, start, start0))]
+        # the timing found by bilateral responses and with the one the unilateral responses place best (where
+        # it differs)
+        flying = _flying_timing(model, start, start0)
+        options = [start, _waveform_start(model, start, start0, start0)] + \
+            ([_waveform_start(model, start, start0, flying)] if _timing_differs(flying, start0) else [])
     else:
         options = [start]
     fits = [fit_tractor(model, s, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET) for s in options]
@@ -243,7 +245,7 @@ def _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels) -> Trac
             # differ, the lower BIC kept
             start2 = starting_values(pb, fit_scale=True)
             scaled = {"kept": False, "residual_to_noise_before": max(_residual_to_noise(run))}
-            if _timing_differs(start2, start0) or _timing_differs(start2["enveloped"], start0["enveloped"]):
+            if _new_start(start2, start0, run["final"].params):
                 tick("starting values with the responses' scale fitted")
                 third = _select(pb, start2, effects, pool, tick, n, n_eff)
                 scaled.update(kept=bool(_final_bic(third, n, n_eff) < _final_bic(run, n, n_eff)),
@@ -276,11 +278,12 @@ def _timing_differs(a: dict, b: dict) -> bool:
 
 
 def _new_start(start1: dict, start0: dict, fitted: dict) -> bool:
-    """Whether the rescue's start (:func:`~identification.diagnose.joint_start.rescue_start`) is a new one: its
-    tires scaled off the waveform fits' (by more than :data:`OTHER_TIRES`), its enveloped arrivals off the
-    first start's, or its point-contact arrivals off both the first start's and the first selection's fit.
-    Otherwise the selection would run again from where it began or ended (measured on the independent
-    simulator's point-contact corners: the same result again, at twice the cost)."""
+    """Whether another selection's start (the rescue's, :func:`~identification.diagnose.joint_start.rescue_start`,
+    or the scaled searches') is a new one: its tires off the first start's (by more than :data:`OTHER_TIRES`),
+    its enveloped arrivals off the first start's, or its point-contact arrivals off both the first start's and
+    the first selection's fit.  Otherwise the selection would run again from where it began or ended
+    (measured on the independent simulator's point-contact corners: the same result again, at twice the
+    cost)."""
     tires = any(abs(start1[n] / start0[n] - 1.0) > OTHER_TIRES for n in start0 if n[:2] in ("k_", "c_"))
     point = _timing_differs(start1, start0) and _timing_differs(start1, fitted)
     return tires or point or _timing_differs(start1["enveloped"], start0["enveloped"])
