@@ -115,11 +115,9 @@ def _try(job):
     elif "lift_off" in new:
         # a wheel that flies lands later: the current model's timing and tires (fitted with a tire that pulls the
         # hub down) may hold the unilateral fit in a worse minimum; fit from the waveform fits as well, with
-        # the timing found by bilateral responses and with the one the unilateral responses place best (where
-        # it differs)
-        flying = _flying_timing(model, start, start0)
-        options = [start, _waveform_start(model, start, start0, start0)] + \
-            ([_waveform_start(model, start, start0, flying)] if _timing_differs(flying, start0) else [])
+        # the timing found by bilateral responses and with the one the unilateral responses place best
+        options = [start, _waveform_start(model, start, start0, start0),
+                   _waveform_start(model, start, start0, _flying_timing(model, start, start0))]
     else:
         options = [start]
     fits = [fit_tractor(model, s, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET) for s in options]
