@@ -227,12 +227,15 @@ def _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels) -> Trac
         if max(_residual_to_noise(run)) > RESCUE_RATIO and len(pb.channels) > 1:
             tick("rescue: starting values with scaled stiffness")
             start1 = rescue_start(pb, start0)
-            second = _select(pb, start1, effects, pool, tick, n, n_eff)
-            better = _final_bic(second, n, n_eff) < _final_bic(run, n, n_eff)
-            rescue = {"residual_to_noise_before": max(_residual_to_noise(run)),
-                      "residual_to_noise_after": max(_residual_to_noise(second)), "kept": bool(better)}
-            if better:
-                run, start0 = second, start1
+            rescue = {"residual_to_noise_before": max(_residual_to_noise(run)), "kept": False}
+            if _new_start(start1, start0, run["final"].params):
+                second = _select(pb, start1, effects, pool, tick, n, n_eff)
+                better = _final_bic(second, n, n_eff) < _final_bic(run, n, n_eff)
+                rescue.update(residual_to_noise_after=max(_residual_to_noise(second)), kept=bool(better))
+                if better:
+                    run, start0 = second, start1
+            else:
+                rescue["skipped"] = "its start is where the selection already ended"
         if max(_residual_to_noise(run)) > RESCUE_RATIO:
             # a model whose impact is too large for the data (a point contact on a wide, bevelled cleat)
             # can place the arrivals where its responses cancel; the searches with the responses' scale
@@ -240,7 +243,7 @@ def _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels) -> Trac
             # differ, the lower BIC kept
             start2 = starting_values(pb, fit_scale=True)
             scaled = {"kept": False, "residual_to_noise_before": max(_residual_to_noise(run))}
-            if _timing_differs(start2, start0) or _timing_differs(start2["enveloped"], start0["enveloped"]):
+            if _new_start(start2, start0, run["final"].params):
                 tick("starting values with the responses' scale fitted")
                 third = _select(pb, start2, effects, pool, tick, n, n_eff)
                 scaled.update(kept=bool(_final_bic(third, n, n_eff) < _final_bic(run, n, n_eff)),
@@ -264,10 +267,24 @@ RESCUE_RATIO = 10.0
 
 #: Timings (arrival, stagger, delay) further apart than this in some quantity are different starts, s.
 OTHER_TIMING_S = 0.005
+#: Starting tires (k, c) further apart than this relative difference are different starts.
+OTHER_TIRES = 0.01
 
 
 def _timing_differs(a: dict, b: dict) -> bool:
     return any(abs(a[k] - b[k]) > OTHER_TIMING_S for k in ("arrival", "stagger", "delay") if k in a and k in b)
+
+
+def _new_start(start1: dict, start0: dict, fitted: dict) -> bool:
+    """Whether another selection's start (the rescue's, :func:`~identification.diagnose.joint_start.rescue_start`,
+    or the scaled searches') is a new one: its tires off the first start's (by more than :data:`OTHER_TIRES`),
+    its enveloped arrivals off the first start's, or its point-contact arrivals off both the first start's and
+    the first selection's fit.  Otherwise the selection would run again from where it began or ended
+    (measured on the independent simulator's point-contact corners: the same result again, at twice the
+    cost)."""
+    tires = any(abs(start1[n] / start0[n] - 1.0) > OTHER_TIRES for n in start0 if n[:2] in ("k_", "c_"))
+    point = _timing_differs(start1, start0) and _timing_differs(start1, fitted)
+    return tires or point or _timing_differs(start1["enveloped"], start0["enveloped"])
 
 
 def _residual_to_noise(run: dict) -> list:
