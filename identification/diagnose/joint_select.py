@@ -279,9 +279,9 @@ def _new_start(start1: dict, start0: dict, fitted: dict) -> bool:
     """Whether another selection's start (the rescue's, :func:`~identification.diagnose.joint_start.rescue_start`,
     or the scaled searches') is a new one: its tires off the first start's (by more than :data:`OTHER_TIRES`),
     its enveloped arrivals off the first start's, or its point-contact arrivals off both the first start's and
-    the first selection's fit.  Otherwise the selection would run again from where it began or ended
-    (measured on the independent simulator's point-contact corners: the same result again, at twice the
-    cost)."""
+    the kept selection's fitted ones (`fitted`).  Otherwise the selection would run again from where it began
+    or ended (measured on the independent simulator's point-contact corners: the same result again, at twice
+    the cost; every result of its tuning and acceptance seeds unchanged)."""
     tires = any(abs(start1[n] / start0[n] - 1.0) > OTHER_TIRES for n in start0 if n[:2] in ("k_", "c_"))
     point = _timing_differs(start1, start0) and _timing_differs(start1, fitted)
     return tires or point or _timing_differs(start1["enveloped"], start0["enveloped"])
