@@ -240,7 +240,7 @@ def _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels) -> Trac
             # a model whose impact is too large for the data (a point contact on a wide, bevelled cleat)
             # can place the arrivals where its responses cancel; the searches with the responses' scale
             # fitted do not, but fail elsewhere (joint_timing's notes): from their timings too, where they
-            # differ, the lower BIC kept
+            # make a new start (`_new_start`), the lower BIC kept
             start2 = starting_values(pb, fit_scale=True)
             scaled = {"kept": False, "residual_to_noise_before": max(_residual_to_noise(run))}
             if _new_start(start2, start0, run["final"].params):
