@@ -153,7 +153,7 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
     (:func:`~identification.diagnose.joint_start.rescue_start`), and the run
     with the lower BIC is kept (``extra["rescue"]`` says which).  If the kept run still leaves that much,
     the selection runs once more from the timings searched with the responses' common scale fitted
-    (``starting_values(..., fit_scale=True)``) where they differ, the lower BIC kept
+    (``starting_values(..., fit_scale=True)``) where they make a new start, the lower BIC kept
     (``extra["scaled_start"]``).
 
     Sensor signs the conditioning left open (a front channel read upside down or a pivoting axle; no
