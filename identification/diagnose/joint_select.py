@@ -223,33 +223,30 @@ def _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels) -> Trac
     pool = process_pool(workers)
     try:
         run = _select(pb, start0, effects, pool, tick, n, n_eff)
+
+        def again(label, start1):
+            """The selection once more from `start1` where it is a new start (`_new_start`), the lower BIC kept."""
+            nonlocal run, start0
+            record = {"residual_to_noise_before": max(_residual_to_noise(run)), "kept": False}
+            if not _new_start(start1, start0, run["final"].params):
+                record["skipped"] = "its start is where the selection already ended"
+                return record
+            tick(label)
+            other = _select(pb, start1, effects, pool, tick, n, n_eff)
+            record.update(kept=bool(_final_bic(other, n, n_eff) < _final_bic(run, n, n_eff)),
+                          residual_to_noise_after=max(_residual_to_noise(other)))
+            if record["kept"]:
+                run, start0 = other, start1
+            return record
+
         rescue = scaled = None
         if max(_residual_to_noise(run)) > RESCUE_RATIO and len(pb.channels) > 1:
-            tick("rescue: starting values with scaled stiffness")
-            start1 = rescue_start(pb, start0)
-            rescue = {"residual_to_noise_before": max(_residual_to_noise(run)), "kept": False}
-            if _new_start(start1, start0, run["final"].params):
-                second = _select(pb, start1, effects, pool, tick, n, n_eff)
-                better = _final_bic(second, n, n_eff) < _final_bic(run, n, n_eff)
-                rescue.update(residual_to_noise_after=max(_residual_to_noise(second)), kept=bool(better))
-                if better:
-                    run, start0 = second, start1
-            else:
-                rescue["skipped"] = "its start is where the selection already ended"
+            rescue = again("rescue: starting values with scaled stiffness", rescue_start(pb, start0))
         if max(_residual_to_noise(run)) > RESCUE_RATIO:
             # a model whose impact is too large for the data (a point contact on a wide, bevelled cleat)
             # can place the arrivals where its responses cancel; the searches with the responses' scale
-            # fitted do not, but fail elsewhere (joint_timing's notes): from their timings too, where they
-            # make a new start (`_new_start`), the lower BIC kept
-            start2 = starting_values(pb, fit_scale=True)
-            scaled = {"kept": False, "residual_to_noise_before": max(_residual_to_noise(run))}
-            if _new_start(start2, start0, run["final"].params):
-                tick("starting values with the responses' scale fitted")
-                third = _select(pb, start2, effects, pool, tick, n, n_eff)
-                scaled.update(kept=bool(_final_bic(third, n, n_eff) < _final_bic(run, n, n_eff)),
-                              residual_to_noise_after=max(_residual_to_noise(third)))
-                if scaled["kept"]:
-                    run, start0 = third, start2
+            # fitted do not, but fail elsewhere (joint_timing's notes): from their timings too
+            scaled = again("starting values with the responses' scale fitted", starting_values(pb, fit_scale=True))
     except BaseException:
         stop_pool(pool)
         raise
