@@ -129,6 +129,7 @@ def test_an_undetermined_corner_reports_its_own_channel_fit_within_the_range_sea
     diag = dataclasses.replace(_diagnosis(pb, start, fit, wrong),
                                unexplained={t: unexplained(pb, pred, t) for t in pb.channels})
     monkeypatch.setattr(free_decay, "MIN_DECAY_R2", 1.01)   # no free decay passes: the undetermined path decides
+    monkeypatch.setattr(free_decay, "DECAY_AT_NOISE", 0.0)
     diag.extra["free_decay"] = check = free_decay_check(diag)
     assert check["RL"].get("undetermined") and not any(check[t].get("undetermined") for t in ("FL", "FR", "RR"))
     doc = diag.to_json()["tires"]
@@ -268,3 +269,38 @@ def test_a_body_decay_that_does_not_count_says_why(rigid, monkeypatch):
     assert all(not check[t]["valid"] and not check[t].get("body_decay") for t in pb.channels)
     assert all("the body's free decay leaves" in check[t]["why_not"] for t in pb.channels
                if "why_not" in check[t] and check[t]["why_not"] and "waveform" not in check[t]["why_not"])
+
+
+@pytest.mark.parametrize("signal_to_noise, valid", [(5.0, True), (2.0, False)])
+def test_a_small_decay_is_a_check_where_its_residual_is_the_noise(corners, signal_to_noise, valid):
+    """White noise added to RL until its free decay stands 5x (2x) above it: one damped mode then explains the
+    decay only to R² ~ 1 - 1/25 (1 - 1/4), below MIN_DECAY_R2, but its residual is the noise (the noise before
+    the impact, the closed form's reference), so at 5x the decay still checks the joint fit, with an interval
+    that holds the rig's truth; buried at 2x it does not."""
+    import numpy as np
+
+    from identification.diagnose import free_decay
+    from identification.identify.waveform import identify_waveform
+    from identification.recording import STANDARD_GRAVITY
+    from identification.recording.preprocess import preprocess
+
+    run, pb, start, fit = corners
+    rec = pb.rec
+    mass = rec.wheel_load_N["RL"] / STANDARD_GRAVITY
+    sig = preprocess(rec, ["RL"], cutoff_hz=pb.cutoff_hz, min_peaks=1)["RL"]
+    wave = identify_waveform(sig, mass)
+    window = (sig.time_s >= wave.window_s[0]) & (sig.time_s <= wave.window_s[1])
+    sigma = float(np.std(sig.raw_m_s2[window])) / signal_to_noise
+    x = rec.accel_m_s2["RL"] + np.random.default_rng(3).normal(0.0, sigma, rec.time_s.size)
+    noisy = dataclasses.replace(rec, accel_m_s2={**rec.accel_m_s2, "RL": x})
+    diag = _diagnosis(dataclasses.replace(pb, rec=noisy), start, fit, fit)
+    entry = free_decay_check(diag)["RL"]
+    assert entry["r2"] < free_decay.MIN_DECAY_R2
+    assert entry["residual_to_noise"] == pytest.approx(1.0, abs=0.05)
+    assert entry["signal_to_noise"] == pytest.approx(signal_to_noise, rel=0.1)
+    assert entry["valid"] is valid
+    if valid:
+        truth = run.truth["tires"]["RL"]
+        assert entry["k_ci"][0] <= truth["k"] <= entry["k_ci"][1] and entry["c_ci"][0] <= truth["c"] <= entry["c_ci"][1]
+    else:
+        assert entry["why_not"].startswith("the free decay is no damped sinusoid")
