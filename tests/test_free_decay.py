@@ -42,7 +42,12 @@ def test_a_sound_fit_is_not_collapsed_and_keeps_its_own_values(corners):
 
 
 @pytest.mark.parametrize("name, value", [("k_RL", 1e-6), ("k_RL", 1e9), ("c_RL", 1e-3)])
-def test_a_collapsed_tire_reports_its_channel_fit_with_the_range_searched(corners, name, value):
+def test_a_collapsed_tire_reports_its_channel_fit_with_the_range_searched(corners, name, value, monkeypatch):
+    """Its free decay no check (made so here): the channel's own fit, each interval the range searched."""
+    from identification.diagnose import free_decay
+
+    monkeypatch.setattr(free_decay, "MIN_DECAY_R2", 1.01)
+    monkeypatch.setattr(free_decay, "DECAY_AT_NOISE", 0.0)
     run, pb, start, fit = corners
     broken = dataclasses.replace(fit, params={**fit.params, name: value})
     diag = _diagnosis(pb, start, fit, broken)
@@ -57,6 +62,27 @@ def test_a_collapsed_tire_reports_its_channel_fit_with_the_range_searched(corner
     assert all(doc[t]["k_source"] != "channel_fit" for t in ("FL", "FR", "RR"))
     warning = [w for w in diagnosis_warnings(diag, _NoGain()) if w.startswith("RL: the joint fit collapsed")]
     assert len(warning) == 1 and "not determined by the data" in warning[0]
+
+
+@pytest.mark.parametrize("name, value", [("k_RL", 1e-6), ("c_RL", 1e-3)])
+def test_a_collapsed_tire_with_a_valid_free_decay_reports_the_decay(corners, name, value):
+    """The rig's clean corner decays as one damped mode: a collapsed RL is reported as its free decay's k and c,
+    with the decay's intervals (which hold the rig's truth and are far narrower than the range searched), and
+    the warning says why."""
+    run, pb, start, fit = corners
+    broken = dataclasses.replace(fit, params={**fit.params, name: value})
+    diag = _diagnosis(pb, start, fit, broken)
+    diag.extra["free_decay"] = check = free_decay_check(diag)
+    assert check["RL"]["decay_only"] and check["RL"]["joint_collapsed"] and not check["RL"].get("collapsed")
+    doc = diag.to_json()["tires"]
+    rl, truth = doc["RL"], run.truth["tires"]["RL"]
+    assert rl["k_source"] == "free_decay" and rl["c_source"] == "free_decay"
+    assert rl["k"] == check["RL"]["k"] and rl["k_ci"] == check["RL"]["k_ci"] and rl["c_ci"] == check["RL"]["c_ci"]
+    for q in ("k", "c"):
+        assert rl[f"{q}_ci"][0] <= truth[q] <= rl[f"{q}_ci"][1], q
+    assert rl["k_ci"][1] / rl["k_ci"][0] < 1.2                       # the decay's, not the range searched
+    warning = [w for w in diagnosis_warnings(diag, _NoGain()) if w.startswith("RL: the joint fit collapsed")]
+    assert len(warning) == 1 and "k and c are the free decay's" in warning[0]
 
 
 class _NoGain:

@@ -45,7 +45,11 @@ model's bounds: k within 0.2-5x, c within 1e-3-5x + 2 kN s/m; seen: k -> 0 on ri
 friction the model does not know) has collapsed: that is no measurement.  The tire's k and c are then
 the channel's own fit's (:func:`~identification.diagnose.joint_start.tire_start`: the waveform fit, the
 paper's method or the ringing frequency), ``"k_source": "channel_fit"``, each interval the whole range
-searched around it (the data do not narrow it), and a warning says so with the residual left.
+searched around it (the data do not narrow it), and a warning says so with the residual left.  Where that
+tire's free decay is a valid check (one damped mode of a linear tire, no body, friction or progressive law
+named, as above), its values and intervals are the tire's instead (``"decay_only"``,
+``"k_source": "free_decay"``): the part of the record that needs the least of the model measures the tire
+the collapsed fit does not.
 
 A joint fit that leaves more than :data:`UNDETERMINED_SHARE` of a channel's signal energy unexplained
 (beyond the noise) is no measurement of that tire either: its model does not describe what the hub did
@@ -78,9 +82,9 @@ import numpy as np
 from ..errors import InputError
 from ..recording.preprocess import preprocess
 from ..recording import STANDARD_GRAVITY
-from ..identify.waveform import ONE_MODE_R2, identify_waveform, with_floor
+from ..identify.waveform import ONE_MODE_R2, decay_to_noise, identify_waveform, with_floor
 
-__all__ = ["free_decay_check", "decay_to_noise", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS", "UNDETERMINED_SHARE"]
+__all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS", "UNDETERMINED_SHARE"]
 
 #: A channel the final model leaves this share of its signal energy unexplained (beyond the noise) is not
 #: measured by it: its k and c intervals are the range searched.
@@ -100,8 +104,6 @@ DECAY_AT_NOISE = 1.05
 #: ... where the decay stands this far above the noise (the fitted decay's RMS over its window / the noise
 #: RMS): a decay buried in the noise is explained by any mode.
 DECAY_MIN_SNR = 3.0
-#: The noise RMS is the raw channel's before this margin ahead of its impact, s.
-NOISE_MARGIN_S = 0.05
 #: Named, these make the decay's shape other than a damped sinusoid.  (A steady line rides on it and is taken
 #: out first: :func:`_without_the_line`.)
 SHAPE_EFFECTS = ("friction_damping", "nonlinear_stiffness")
@@ -131,14 +133,12 @@ def free_decay_check(diag) -> dict:
                 f"{', '.join(named)} named: the free decay is not a linear tire's under a corner mass" if named
                 else None)
     for tire in pb.channels:
-        if collapsed(diag, tire):
-            out[tire] = _channel_fit_instead(diag, tire)
-            continue
         try:
             sig = preprocess(_without_the_line(rec, tire, diag), [tire], cutoff_hz=pb.cutoff_hz, min_peaks=1)[tire]
             wave = identify_waveform(sig, rec.wheel_load_N[tire] / STANDARD_GRAVITY, source=rec.source)
         except InputError as exc:
-            out[tire] = {"valid": False, "why_not": f"no waveform fit: {exc.problem}"}
+            out[tire] = (_channel_fit_instead(diag, tire) if collapsed(diag, tire) else
+                         {"valid": False, "why_not": f"no waveform fit: {exc.problem}"})
             continue
         fin = diag.final
         entry = {"valid": True, "why_not": None, "k": float(wave.k), "c": float(wave.c),
@@ -153,6 +153,12 @@ def free_decay_check(diag) -> dict:
             # a forced response, a progressive or coupled hub; not a small decay whose R² the noise caps
             why_not = (f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < {MIN_DECAY_R2}, its residual "
                        f"{residual:.2f}x the noise before the impact)")
+        if collapsed(diag, tire):
+            # the free decay, where it is a linear tire's damped sinusoid, measures the tire the collapsed joint
+            # fit does not; else the channel's own fit, with the range searched
+            out[tire] = (_decay_instead(diag, tire, entry) if why_not is None and not c_only else
+                         _channel_fit_instead(diag, tire))
+            continue
         sentences = _compare(fin, tire, entry, "the free decay's" if why_not is None else
                              "the channel's waveform fit's")
         if why_not is not None:
@@ -188,19 +194,6 @@ def free_decay_check(diag) -> dict:
         entry.update(_searched(diag, tire))
         _undetermined(diag, tire, entry)
     return out
-
-
-def decay_to_noise(sig, wave) -> tuple[float, float]:
-    """The waveform fit's residual RMS and the RMS of what it explains (the decay), each over the noise RMS of
-    the raw channel it fits before the impact (NaN where that stretch is shorter than 20 samples)."""
-    t = sig.time_s
-    quiet = sig.raw_m_s2[t < sig.impact_s - NOISE_MARGIN_S]
-    noise = float(np.std(quiet)) if quiet.size >= 20 else math.nan
-    window = sig.raw_m_s2[(t >= wave.window_s[0]) & (t <= wave.window_s[1])]
-    spread = float(np.var(window)) if window.size else math.nan
-    if not noise > 0:
-        return math.nan, math.nan
-    return math.sqrt(max(0.0, 1.0 - wave.r2) * spread) / noise, math.sqrt(max(0.0, wave.r2) * spread) / noise
 
 
 def _without_the_line(rec, tire: str, diag):
@@ -320,25 +313,40 @@ def collapsed(diag, tire: str) -> bool:
     return any(not lo[n] <= fin.params[n] <= hi[n] for n in names)
 
 
+def _collapse_sentence(diag, tire: str, rng: dict) -> str:
+    fin = diag.final
+    left = diag.unexplained.get(tire)
+    residual = (f"it leaves {left['residual_to_noise']:.1f}x the noise" if left else
+                "its residual is at the noise floor")
+    return (f"{tire}: the joint fit collapsed (k {fin.params[f'k_{tire}'] / 1e3:.3g} kN/m, c "
+            f"{fin.params[f'c_{tire}'] / 1e3:.3g} kN s/m, outside the {rng['k_range'][0] / 1e3:.0f}-"
+            f"{rng['k_range'][1] / 1e3:.0f} kN/m and {rng['c_range'][0] / 1e3:.3g}-{rng['c_range'][1] / 1e3:.3g} "
+            f"kN s/m it searches): the model does not explain this channel ({residual})")
+
+
 def _channel_fit_instead(diag, tire: str) -> dict:
     """The check's entry of a collapsed tire: the channel's own fit, each interval the range searched."""
     from .joint_start import tire_start
 
-    fin = diag.final
     k, c = tire_start(diag.problem, tire)
-    rng = _range_around(fin, tire, k, c)
+    rng = _range_around(diag.final, tire, k, c)
     entry = {"valid": False, "why_not": "the joint fit collapsed", "collapsed": True, "prefer": True,
              "agree": False, "k": float(k), "c": float(c), "k_ci": rng["k_range"], "c_ci": rng["c_range"]}
-    left = diag.unexplained.get(tire)
-    residual = (f"it leaves {left['residual_to_noise']:.1f}x the noise" if left else
-                "its residual is at the noise floor")
-    entry["reason"] = (
-        f"{tire}: the joint fit collapsed (k {fin.params[f'k_{tire}'] / 1e3:.3g} kN/m, c "
-        f"{fin.params[f'c_{tire}'] / 1e3:.3g} kN s/m, outside the {entry['k_ci'][0] / 1e3:.0f}-"
-        f"{entry['k_ci'][1] / 1e3:.0f} kN/m and {entry['c_ci'][0] / 1e3:.3g}-{entry['c_ci'][1] / 1e3:.3g} kN s/m "
-        f"it searches): the model does not explain this channel ({residual}); k and c are the channel's own "
-        f"fit's (k {k / 1e3:.1f} kN/m, c {c / 1e3:.3f} kN s/m), not determined by the data: each interval is "
-        f"the whole range searched")
+    entry["reason"] = (f"{_collapse_sentence(diag, tire, rng)}; k and c are the channel's own fit's (k "
+                       f"{k / 1e3:.1f} kN/m, c {c / 1e3:.3f} kN s/m), not determined by the data: each interval is "
+                       f"the whole range searched")
+    return entry
+
+
+def _decay_instead(diag, tire: str, entry: dict) -> dict:
+    """The check's entry of a collapsed tire whose free decay is a valid check (`entry`): the decay's values
+    with its intervals (``decay_only``)."""
+    rng = _range_around(diag.final, tire, entry["k"], entry["c"])
+    entry.update(valid=True, prefer=True, decay_only=True, joint_collapsed=True, agree=False,
+                 reason=f"{_collapse_sentence(diag, tire, rng)}; k and c are the free decay's (k "
+                        f"{entry['k'] / 1e3:.1f} kN/m, c {entry['c'] / 1e3:.3f} kN s/m), with its intervals: one "
+                        f"damped mode explains it (R² {entry['r2']:.3f}, its residual "
+                        f"{entry['residual_to_noise']:.2f}x the noise)")
     return entry
 
 

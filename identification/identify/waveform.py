@@ -49,13 +49,15 @@ from ..recording import Recording
 
 __all__ = ["WaveformResult", "fit_free_decay", "identify_waveform", "long_run_variance_ratio", "decay_misfit",
            "with_floor", "DECAY_FLOOR", "AMPLITUDE_MOVE_FACTOR",
-           "WINDOW_SHIFT_PERIODS", "ONE_MODE_R2", "MAX_SKIPPED_PEAKS"]
+           "WINDOW_SHIFT_PERIODS", "ONE_MODE_R2", "MAX_SKIPPED_PEAKS", "decay_to_noise"]
 
 #: The window-shift check starts the fit this many damped periods after the free decay's first peak.
 WINDOW_SHIFT_PERIODS = 0.5
 #: One damped mode explains a free decay to this R² (below it: a forced response, a progressive or coupled
 #: hub); the diagnosis takes the free decay as a check only above it.
 ONE_MODE_R2 = 0.985
+#: :func:`decay_to_noise` takes the noise RMS of the raw channel before this margin ahead of its impact, s.
+NOISE_MARGIN_S = 0.05
 #: Peaks the fit may skip while the tire can still touch the cleat.
 MAX_SKIPPED_PEAKS = 2
 #: Relative half-width added in quadrature to the 95 % intervals of k and c: how far a rolling tire's
@@ -266,6 +268,19 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
         window_s=(float(t[sel][0]), float(t[sel][-1])), variance_inflation=inflation, window=window,
         decay_misfit=inflation, window_shift=shift, skipped_peaks=skipped, amplitude_move=moved,
         envelope_ratio=ratio)
+
+
+def decay_to_noise(sig, wave) -> tuple[float, float]:
+    """The waveform fit's residual RMS and the RMS of what it explains (the decay), each over the noise RMS of
+    the raw channel it fits before the impact (NaN where that stretch is shorter than 20 samples)."""
+    t = sig.time_s
+    quiet = sig.raw_m_s2[t < sig.impact_s - NOISE_MARGIN_S]
+    noise = float(np.std(quiet)) if quiet.size >= 20 else math.nan
+    window = sig.raw_m_s2[(t >= wave.window_s[0]) & (t <= wave.window_s[1])]
+    spread = float(np.var(window)) if window.size else math.nan
+    if not noise > 0:
+        return math.nan, math.nan
+    return math.sqrt(max(0.0, 1.0 - wave.r2) * spread) / noise, math.sqrt(max(0.0, wave.r2) * spread) / noise
 
 
 def _k_c(params, cov, n: int, mass_kg: float) -> tuple[float, float, float, float]:
