@@ -98,8 +98,9 @@ MIN_DECAY_R2 = ONE_MODE_R2
 #: A decay that one damped mode explains to within this multiple of the channel's noise RMS is a damped
 #: sinusoid whatever its R²: a small decay's R² is capped by the noise (R² <= 1 - (noise / signal)², 0.96 at
 #: 5x the noise), so that R² alone refused the rear decays of slow passes.  On the independent simulator's
-#: tuning corners the 9 decays at R² 0.92-0.984 within 1.01x their noise gave k within 1.6 % and c within 6 %;
-#: at 1.10-1.3x (friction the diagnosis had not named, a coupled hub) c was 30-500 % off.
+#: tuning corners the 11 decays at R² 0.92-0.984 within 1.02x their noise gave k within 1.6 % and c within 6 %;
+#: at 1.12-1.3x (friction the diagnosis had not named) c was 110-500 % off, and the missed bodies' decays
+#: stood at 2-6x the noise before the first impact (the noise before their own impact holds the body's motion).
 DECAY_AT_NOISE = 1.05
 #: ... where the decay stands this far above the noise (the fitted decay's RMS over its window / the noise
 #: RMS): a decay buried in the noise is explained by any mode.
@@ -145,14 +146,14 @@ def free_decay_check(diag) -> dict:
                  "k_ci": [float(v) for v in wave.k_ci], "c_ci": [float(v) for v in wave.c_ci],
                  "amplitude_move": {q: float(v) for q, v in zip("kc", wave.amplitude_move)},
                  "r2": float(wave.r2)}
-        residual, signal = decay_to_noise(sig, wave)
+        residual, signal = decay_to_noise(sig, wave, pb.first_impact_s)
         entry.update(residual_to_noise=residual, signal_to_noise=signal)
         why_not = no_check
         if why_not is None and wave.r2 < MIN_DECAY_R2 and not (residual <= DECAY_AT_NOISE
                                                                 and signal >= DECAY_MIN_SNR):
             # a forced response, a progressive or coupled hub; not a small decay whose R² the noise caps
             why_not = (f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < {MIN_DECAY_R2}, its residual "
-                       f"{residual:.2f}x the noise before the impact)")
+                       f"{residual:.2f}x the noise before the first impact)")
         if collapsed(diag, tire):
             # the free decay, where it is a linear tire's damped sinusoid, measures the tire the collapsed joint
             # fit does not; else the channel's own fit, with the range searched

@@ -56,7 +56,7 @@ WINDOW_SHIFT_PERIODS = 0.5
 #: One damped mode explains a free decay to this R² (below it: a forced response, a progressive or coupled
 #: hub); the diagnosis takes the free decay as a check only above it.
 ONE_MODE_R2 = 0.985
-#: :func:`decay_to_noise` takes the noise RMS of the raw channel before this margin ahead of its impact, s.
+#: :func:`decay_to_noise` takes the noise RMS of the raw channel before this margin ahead of the first impact, s.
 NOISE_MARGIN_S = 0.05
 #: Peaks the fit may skip while the tire can still touch the cleat.
 MAX_SKIPPED_PEAKS = 2
@@ -270,11 +270,13 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
         envelope_ratio=ratio)
 
 
-def decay_to_noise(sig, wave) -> tuple[float, float]:
+def decay_to_noise(sig, wave, quiet_until_s: float) -> tuple[float, float]:
     """The waveform fit's residual RMS and the RMS of what it explains (the decay), each over the noise RMS of
-    the raw channel it fits before the impact (NaN where that stretch is shorter than 20 samples)."""
+    the raw channel it fits before `quiet_until_s` less :data:`NOISE_MARGIN_S` (the recording's first impact:
+    on a coupled tractor a later channel moves with the first impact before its own; NaN where that stretch
+    is shorter than 20 samples)."""
     t = sig.time_s
-    quiet = sig.raw_m_s2[t < sig.impact_s - NOISE_MARGIN_S]
+    quiet = sig.raw_m_s2[t < quiet_until_s - NOISE_MARGIN_S]
     noise = float(np.std(quiet)) if quiet.size >= 20 else math.nan
     window = sig.raw_m_s2[(t >= wave.window_s[0]) & (t <= wave.window_s[1])]
     spread = float(np.var(window)) if window.size else math.nan
