@@ -330,3 +330,17 @@ def test_a_small_decay_is_a_check_where_its_residual_is_the_noise(corners, signa
         assert entry["k_ci"][0] <= truth["k"] <= entry["k_ci"][1] and entry["c_ci"][0] <= truth["c"] <= entry["c_ci"][1]
     else:
         assert entry["why_not"].startswith("the free decay is no damped sinusoid")
+
+
+def test_a_later_hub_moves_before_its_own_impact_only_on_a_body(corners):
+    """On the rig's independent corners every later channel is quiet (its noise) until its own impact; on its
+    rigid tractor the rear hubs move with the front impact first, beyond MOVES_BEFORE_IMPACT, so no collapsed
+    tire's decay and no noise-level decay counts there."""
+    from identification.diagnose.free_decay import MOVES_BEFORE_IMPACT, moves_before_impact
+
+    run, pb, start, fit = corners
+    quiet = moves_before_impact(pb)
+    assert {"RL", "RR"} <= set(quiet) and all(0.7 < v < 1.3 for v in quiet.values())
+    rigid = run_rig(("axle_coupling",), {"duration_s": 4.0, "speed_kmh": 10.0}, seed=8)
+    moved = moves_before_impact(TractorProblem.from_recording(rigid.recording))
+    assert min(moved["RL"], moved["RR"]) > MOVES_BEFORE_IMPACT

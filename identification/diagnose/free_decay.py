@@ -82,7 +82,7 @@ import numpy as np
 from ..errors import InputError
 from ..recording.preprocess import preprocess
 from ..recording import STANDARD_GRAVITY
-from ..identify.waveform import ONE_MODE_R2, decay_to_noise, identify_waveform, with_floor
+from ..identify.waveform import NOISE_MARGIN_S, ONE_MODE_R2, decay_to_noise, identify_waveform, with_floor
 
 __all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS", "UNDETERMINED_SHARE"]
 
@@ -102,6 +102,10 @@ MIN_DECAY_R2 = ONE_MODE_R2
 #: at 1.12-1.3x (friction the diagnosis had not named) c was 110-500 % off, and the missed bodies' decays
 #: stood at 2-6x the noise before the first impact (the noise before their own impact holds the body's motion).
 DECAY_AT_NOISE = 1.05
+#: The noise rule and a collapsed tire's decay count only where no later channel moves more than this multiple
+#: of its noise RMS between the recording's first impact and its own (:func:`moves_before_impact`): on the
+#: independent simulator's corners 0.8-1.15, under the bodies the diagnosis missed 2.4-16.
+MOVES_BEFORE_IMPACT = 2.0
 #: ... where the decay stands this far above the noise (the fitted decay's RMS over its window / the noise
 #: RMS): a decay buried in the noise is explained by any mode.
 DECAY_MIN_SNR = 3.0
@@ -133,6 +137,10 @@ def free_decay_check(diag) -> dict:
     no_check = (f"{', '.join(named)} named and {body_why}" if body_why else
                 f"{', '.join(named)} named: the free decay is not a linear tire's under a corner mass" if named
                 else None)
+    # a channel's decay is its own tire's only where the corners are independent: a later hub that moves with
+    # the first impact, before its own, rides on a body the diagnosis has not named
+    moved = moves_before_impact(pb)
+    corners = max(moved.values(), default=0.0) <= MOVES_BEFORE_IMPACT
     for tire in pb.channels:
         try:
             sig = preprocess(_without_the_line(rec, tire, diag), [tire], cutoff_hz=pb.cutoff_hz, min_peaks=1)[tire]
@@ -147,9 +155,9 @@ def free_decay_check(diag) -> dict:
                  "amplitude_move": {q: float(v) for q, v in zip("kc", wave.amplitude_move)},
                  "r2": float(wave.r2)}
         residual, signal = decay_to_noise(sig, wave, pb.first_impact_s)
-        entry.update(residual_to_noise=residual, signal_to_noise=signal)
+        entry.update(residual_to_noise=residual, signal_to_noise=signal, moves_before_impact=moved)
         why_not = no_check
-        if why_not is None and wave.r2 < MIN_DECAY_R2 and not (residual <= DECAY_AT_NOISE
+        if why_not is None and wave.r2 < MIN_DECAY_R2 and not (corners and residual <= DECAY_AT_NOISE
                                                                 and signal >= DECAY_MIN_SNR):
             # a forced response, a progressive or coupled hub; not a small decay whose R² the noise caps
             why_not = (f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < {MIN_DECAY_R2}, its residual "
@@ -157,7 +165,7 @@ def free_decay_check(diag) -> dict:
         if collapsed(diag, tire):
             # the free decay, where it is a linear tire's damped sinusoid, measures the tire the collapsed joint
             # fit does not; else the channel's own fit, with the range searched
-            out[tire] = (_decay_instead(diag, tire, entry) if why_not is None and not c_only else
+            out[tire] = (_decay_instead(diag, tire, entry) if why_not is None and not c_only and corners else
                          _channel_fit_instead(diag, tire))
             continue
         sentences = _compare(fin, tire, entry, "the free decay's" if why_not is None else
@@ -194,6 +202,19 @@ def free_decay_check(diag) -> dict:
     for tire, entry in out.items():
         entry.update(_searched(diag, tire))
         _undetermined(diag, tire, entry)
+    return out
+
+
+def moves_before_impact(pb) -> dict:
+    """Per channel whose impact comes later than the first: the RMS of its raw signal between the first impact
+    and its own (less a margin) over its RMS before the first impact (independent corners: about 1)."""
+    t, out = pb.rec.time_s, {}
+    for c in pb.channels:
+        x = pb.rec.accel_m_s2[c]
+        quiet = x[t < pb.first_impact_s - NOISE_MARGIN_S]
+        between = x[(t >= pb.first_impact_s) & (t < pb.onsets[c] - NOISE_MARGIN_S)]
+        if between.size >= 20 and quiet.size >= 20 and np.std(quiet) > 0:
+            out[c] = float(np.std(between) / np.std(quiet))
     return out
 
 
