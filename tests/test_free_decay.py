@@ -297,12 +297,13 @@ def test_a_body_decay_that_does_not_count_says_why(rigid, monkeypatch):
                if "why_not" in check[t] and check[t]["why_not"] and "waveform" not in check[t]["why_not"])
 
 
-@pytest.mark.parametrize("signal_to_noise, valid", [(5.0, True), (2.0, False)])
-def test_a_small_decay_is_a_check_where_its_residual_is_the_noise(corners, signal_to_noise, valid):
+@pytest.mark.parametrize("signal_to_noise, valid, body", [(5.0, True, False), (2.0, False, False), (5.0, False, True)])
+def test_a_small_decay_is_a_check_where_its_residual_is_the_noise(corners, signal_to_noise, valid, body):
     """White noise added to RL until its free decay stands 5x (2x) above it: one damped mode then explains the
     decay only to R² ~ 1 - 1/25 (1 - 1/4), below MIN_DECAY_R2, but its residual is the noise (the noise before
     the impact, the closed form's reference), so at 5x the decay still checks the joint fit, with an interval
-    that holds the rig's truth; buried at 2x it does not."""
+    that holds the rig's truth; buried at 2x it does not.  Where RR moves from the first impact on (a 2 Hz body
+    motion at 10x its noise), a body carries the hubs and the 5x decay does not count either, and says so."""
     import numpy as np
 
     from identification.diagnose import free_decay
@@ -318,7 +319,15 @@ def test_a_small_decay_is_a_check_where_its_residual_is_the_noise(corners, signa
     window = (sig.time_s >= wave.window_s[0]) & (sig.time_s <= wave.window_s[1])
     sigma = float(np.std(sig.raw_m_s2[window])) / signal_to_noise
     x = rec.accel_m_s2["RL"] + np.random.default_rng(3).normal(0.0, sigma, rec.time_s.size)
-    noisy = dataclasses.replace(rec, accel_m_s2={**rec.accel_m_s2, "RL": x})
+    accel = {**rec.accel_m_s2, "RL": x}
+    if body:
+        from identification.identify.waveform import noise_before
+
+        rr = rec.accel_m_s2["RR"]
+        sway = 10 * np.sqrt(2) * noise_before(rec.time_s, rr, pb.first_impact_s) * \
+            np.sin(2 * np.pi * 2.0 * (rec.time_s - pb.first_impact_s))
+        accel["RR"] = rr + np.where(rec.time_s >= pb.first_impact_s, sway, 0.0)
+    noisy = dataclasses.replace(rec, accel_m_s2=accel)
     diag = _diagnosis(dataclasses.replace(pb, rec=noisy), start, fit, fit)
     entry = free_decay_check(diag)["RL"]
     assert entry["r2"] < free_decay.MIN_DECAY_R2
@@ -328,6 +337,9 @@ def test_a_small_decay_is_a_check_where_its_residual_is_the_noise(corners, signa
     if valid:
         truth = run.truth["tires"]["RL"]
         assert entry["k_ci"][0] <= truth["k"] <= entry["k_ci"][1] and entry["c_ci"][0] <= truth["c"] <= entry["c_ci"][1]
+    elif body:
+        assert entry["moves_before_impact"]["RR"] > free_decay.MOVES_BEFORE_IMPACT
+        assert "a body the diagnosis did not name carries this decay" in entry["why_not"]
     else:
         assert entry["why_not"].startswith("the free decay is no damped sinusoid")
 

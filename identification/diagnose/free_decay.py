@@ -82,7 +82,7 @@ import numpy as np
 from ..errors import InputError
 from ..recording.preprocess import preprocess
 from ..recording import STANDARD_GRAVITY
-from ..identify.waveform import NOISE_MARGIN_S, ONE_MODE_R2, decay_to_noise, identify_waveform, with_floor
+from ..identify.waveform import ONE_MODE_R2, decay_to_noise, identify_waveform, noise_before, with_floor
 
 __all__ = ["free_decay_check", "reported", "collapsed", "BODY_EFFECTS", "SHAPE_EFFECTS", "UNDETERMINED_SHARE"]
 
@@ -162,6 +162,12 @@ def free_decay_check(diag) -> dict:
             # a forced response, a progressive or coupled hub; not a small decay whose R² the noise caps
             why_not = (f"the free decay is no damped sinusoid (R² {wave.r2:.3f} < {MIN_DECAY_R2}, its residual "
                        f"{residual:.2f}x the noise before the first impact)")
+            if residual <= DECAY_AT_NOISE and signal >= DECAY_MIN_SNR:
+                # the noise rule would count it: say that the body rule refuses it
+                why_not = (f"the free decay's R² {wave.r2:.3f} < {MIN_DECAY_R2} would count at the noise level "
+                           f"(residual {residual:.2f}x the noise), but a later hub moves "
+                           f"{max(moved.values()):.1f}x its noise before its own impact (> {MOVES_BEFORE_IMPACT:g}): "
+                           f"a body the diagnosis did not name carries this decay")
         if collapsed(diag, tire):
             # the free decay, where it is a linear tire's damped sinusoid, measures the tire the collapsed joint
             # fit does not; else the channel's own fit, with the range searched
@@ -213,10 +219,10 @@ def moves_before_impact(pb) -> dict:
     t, out = pb.rec.time_s, {}
     for c in pb.channels:
         x = pb.rec.accel_m_s2[c]
-        quiet = x[t < pb.first_impact_s - NOISE_MARGIN_S]
+        noise = noise_before(t, x, pb.first_impact_s)
         between = x[(t >= pb.first_impact_s) & (t < 0.5 * (pb.first_impact_s + pb.onsets[c]))]
-        if between.size >= 20 and quiet.size >= 20 and np.std(quiet) > 0:
-            out[c] = float(np.std(between) / np.std(quiet))
+        if between.size >= 20 and noise > 0:
+            out[c] = float(np.std(between) / noise)
     return out
 
 

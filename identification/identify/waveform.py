@@ -270,14 +270,20 @@ def identify_waveform(sig: TireSignal, mass_kg: float, *, source=None, window: d
         envelope_ratio=ratio)
 
 
+def noise_before(time_s, accel_m_s2, first_impact_s: float) -> float:
+    """RMS about its mean of the raw channel `accel_m_s2` before `first_impact_s` less :data:`NOISE_MARGIN_S`
+    (the noise, where nothing has been hit yet); NaN where that stretch is shorter than 20 samples."""
+    quiet = np.asarray(accel_m_s2)[np.asarray(time_s) < first_impact_s - NOISE_MARGIN_S]
+    return float(np.std(quiet)) if quiet.size >= 20 else math.nan
+
+
 def decay_to_noise(sig, wave, quiet_until_s: float) -> tuple[float, float]:
     """The waveform fit's residual RMS and the RMS of what it explains (the decay), each over the noise RMS of
     the raw channel it fits before `quiet_until_s` less :data:`NOISE_MARGIN_S` (the recording's first impact:
     on a coupled tractor a later channel moves with the first impact before its own; NaN where that stretch
     is shorter than 20 samples)."""
     t = sig.time_s
-    quiet = sig.raw_m_s2[t < quiet_until_s - NOISE_MARGIN_S]
-    noise = float(np.std(quiet)) if quiet.size >= 20 else math.nan
+    noise = noise_before(t, sig.raw_m_s2, quiet_until_s)
     window = sig.raw_m_s2[(t >= wave.window_s[0]) & (t <= wave.window_s[1])]
     spread = float(np.var(window)) if window.size else math.nan
     if not noise > 0:
