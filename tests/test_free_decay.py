@@ -5,6 +5,7 @@ The rig's truth is the reference; the diagnosis never reads it."""
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 from identification.diagnose.free_decay import collapsed, free_decay_check
@@ -261,13 +262,20 @@ def rigid():
     return run, pb, start, fit, diag
 
 
-def test_a_named_rigid_body_is_checked_against_its_own_free_decay(rigid):
+@pytest.mark.parametrize("shift_measured", [True, False])
+def test_a_named_rigid_body_is_checked_against_its_own_free_decay(rigid, shift_measured, monkeypatch):
     """Under the rigid body a channel's own decay is the body's mode: the body's free decay over the tail
     (all four channels, :mod:`identification.diagnose.body_decay`) is the check, and it holds the rig's truth;
-    a joint k outside its interval is replaced by the decay's, the interval stretched to hold both (the body's
-    decay rests on the whole body's model), and the decay's own interval carries the floor."""
+    a joint k outside its interval is replaced by the decay's with the decay's own interval, which carries the
+    floor; where the decay's window shift could not be measured, the interval is stretched to hold both (the
+    body's decay rests on the whole body's model)."""
+    import identification.diagnose.body_decay as bd
+
+    if not shift_measured:
+        monkeypatch.setattr(bd, "_window_shift", lambda *a: (np.zeros(a[4].size), False))
     run, pb, start, fit, diag = rigid
     check = free_decay_check(diag)
+    assert all(check[t]["shift_measured"] is shift_measured for t in pb.channels)
     truth = run.truth["tires"]
     for t in pb.channels:
         assert check[t]["valid"] and check[t]["body_decay"], check[t]
@@ -280,8 +288,12 @@ def test_a_named_rigid_body_is_checked_against_its_own_free_decay(rigid):
     assert check2["RL"]["prefer"] and "rigid tractor's free decay" in check2["RL"]["reason"]
     rl = diag2.to_json()["tires"]["RL"]
     assert rl["k_source"] == "free_decay" and rl["k"] == pytest.approx(check2["RL"]["k"])
-    assert rl["k_ci"][0] <= truth["RL"]["k"] <= rl["k_ci"][1] and rl["k_ci"][1] >= 1.01 * k   # holds both
     own = check2["RL"]["k_ci"]
+    assert rl["k_ci"][0] <= truth["RL"]["k"] <= rl["k_ci"][1]
+    if shift_measured:
+        assert rl["k_ci"] == pytest.approx(own) and rl["k_ci"][1] < k and "stretched" not in check2["RL"]["reason"]
+    else:
+        assert rl["k_ci"][1] >= 1.01 * k and "stretched" in check2["RL"]["reason"]     # holds both
     assert min(check2["RL"]["k"] - own[0], own[1] - check2["RL"]["k"]) >= 0.01 * check2["RL"]["k"]   # the floor
 
 

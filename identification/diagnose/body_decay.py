@@ -244,7 +244,7 @@ def body_decay(problem, *, kind: str = "rigid", start: dict | None = None, final
     states = 2 * tail.matrices(params)[0].shape[1] + 2 * len(tail.lines)
     cov, q, lag = _sandwich(tail, best.jac, res, len(names) + states)
     _, lam = tail.design(params)
-    shift = _window_shift(problem, kind, final, fun, x, start_s, end_s, lam)
+    shift, shifted = _window_shift(problem, kind, final, fun, x, start_s, end_s, lam)
     ci = {}
     for i, name in enumerate(names):
         var = float(cov[i, i])
@@ -257,6 +257,7 @@ def body_decay(problem, *, kind: str = "rigid", start: dict | None = None, final
     return BodyDecay(kind=kind, params=params, ci=ci, window=(float(start_s), float(end_s)), nrmse=nrmse,
                      residual_to_noise=float(np.sqrt(np.mean(res ** 2))), modes_hz=modes,
                      extra={"lag": lag, "samples": int(tail.tau.size), "window_shift": shift,
+                            "shift_measured": shifted,
                             "scales": amplitude_scales(tail, params)})
 
 
@@ -271,19 +272,20 @@ def _sandwich(tail: _Tail, jac: np.ndarray, res: np.ndarray, unknowns: int):
     return cov, float(stats.t.ppf(0.975, dof)), lag
 
 
-def _window_shift(problem, kind, final, fun, x, start_s, end_s, lam) -> np.ndarray:
+def _window_shift(problem, kind, final, fun, x, start_s, end_s, lam) -> tuple[np.ndarray, bool]:
     """How far the estimates (logarithms) move when the tail starts one period of the slowest mode later: what
     the impacts' last effects and anything else the free decay does not model pull at the tail's start.  Added
-    to each interval's half-width in quadrature (as a corner decay's window shift is); zero where the shorter
-    tail would be under :data:`MIN_TAIL_S`."""
+    to each interval's half-width in quadrature (as a corner decay's window shift is).  Returns (moves,
+    measured): zeros and False where the shorter tail would be under :data:`MIN_TAIL_S` (a slowest mode near
+    0 Hz, an overdamped motion, makes its period longer than any tail)."""
     slowest = min((abs(float(v.imag)) for v in lam if v.imag > 0), default=0.0)
     later = start_s + (2 * math.pi / slowest if slowest > 0 else 0.0)
     if slowest <= 0 or end_s - later < MIN_TAIL_S:
-        return np.zeros(x.size)
+        return np.zeros(x.size), False
     part = _Tail(problem, later, end_s, kind, final)
     sol = optimize.least_squares(lambda v: fun(v, part), x, method="lm", max_nfev=30 * (x.size + 1))
     moved = sol.x - x
-    return np.where(np.isfinite(moved), np.abs(moved), 0.0)
+    return np.where(np.isfinite(moved), np.abs(moved), 0.0), True
 
 
 def amplitude_scales(tail: _Tail, params: dict) -> dict:
