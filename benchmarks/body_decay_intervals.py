@@ -62,15 +62,10 @@ def main(argv=None):
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore")
     sys.path.insert(0, str(ROOT / "benchmarks"))
-    from sweep_independent import _seeds, _stem, plan
+    from sweep_independent import _seeds, generated
 
     rows = []
-    for setting, seed in plan(_seeds(args.seeds)):
-        if not setting.startswith(("rigid", "pivot")):
-            continue
-        csv = Path(str(_stem(Path(args.cache), setting, seed)) + ".csv")
-        if not csv.exists():
-            sys.exit(f"{csv}: not generated (run benchmarks/sweep_independent.py with the same --cache first)")
+    for csv in generated(args.cache, _seeds(args.seeds), lambda setting: setting.startswith(("rigid", "pivot"))):
         line, new = body_rows(csv)
         print(line, flush=True)
         rows += new

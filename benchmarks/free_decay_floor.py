@@ -71,15 +71,11 @@ def main(argv=None):
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore")
     sys.path.insert(0, str(ROOT / "benchmarks"))
-    from sweep_independent import _seeds, _stem, plan
+    from sweep_independent import _seeds, generated
 
     rows = []
-    for setting, seed in plan(_seeds(args.seeds)):
-        csv = Path(str(_stem(Path(args.cache), setting, seed)) + ".csv")
-        if not setting.startswith("corners") or "lugs" in setting:
-            continue
-        if not csv.exists():
-            sys.exit(f"{csv}: not generated (run benchmarks/sweep_independent.py with the same --cache first)")
+    for csv in generated(args.cache, _seeds(args.seeds),
+                         lambda setting: setting.startswith("corners") and "lugs" not in setting):
         rows += decays(csv)
     print("kind         n  q  floor  coverage  median half  | with the halves' move: coverage  median half")
     for kind in ("clean", "progressive", "rubbing"):

@@ -52,6 +52,19 @@ def _stem(cache: Path, setting: str, seed: int) -> Path:
     return cache / f"{setting.replace(' ', '_')}_{seed}"
 
 
+def generated(cache, seeds, keep=lambda setting: True) -> list[Path]:
+    """The CSV of every recording of `seeds` whose setting `keep` accepts, in plan order; exits naming the
+    first one not generated in `cache` (the sweep, run with the same ``--cache``, generates them)."""
+    out = []
+    for setting, seed in plan(seeds):
+        if keep(setting):
+            csv = Path(str(_stem(Path(cache), setting, seed)) + ".csv")
+            if not csv.exists():
+                sys.exit(f"{csv}: not generated (run benchmarks/sweep_independent.py with the same --cache first)")
+            out.append(csv)
+    return out
+
+
 def generate(job) -> str:
     setting, seed, cache = job
     stem = _stem(Path(cache), setting, seed)
