@@ -24,6 +24,14 @@ def independent_recording(setting: str, seed: int, folder: Path):
     return decimate(focus(rec, cutoff_hz=cutoff, announce=False), cutoff_hz=cutoff), cutoff, truth
 
 
+def independent_diagnosis(setting: str, seed: int, folder: Path):
+    """(the whole-tractor diagnosis, the truth document) of `setting` drawn with `seed`."""
+    from identification.diagnose.joint_select import diagnose_tractor
+
+    rec, cutoff, truth = independent_recording(setting, seed, folder)
+    return diagnose_tractor(rec, cutoff_hz=cutoff), truth
+
+
 def assert_tires_hold_the_truth(diagnosis, truth, *, c_interval: bool = False) -> None:
     """Every tire of `diagnosis` within the issue's 3 % of the truth's k and 10 % of its c, its k interval
     holding the truth's k (and its c interval the truth's c, with `c_interval`)."""

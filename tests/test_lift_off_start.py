@@ -20,14 +20,12 @@ pytest.importorskip("exudyn", reason="the independent simulator needs exudyn (th
 warnings.filterwarnings("ignore", category=DeprecationWarning, module="exudyn")
 pytestmark = pytest.mark.independent   # generated and diagnosed: CI's sweeps step (docs/testing.md)
 
-from identification.diagnose.joint_select import diagnose_tractor  # noqa: E402
-from tests.independent_cases import assert_tires_hold_the_truth, independent_recording  # noqa: E402
+from tests.independent_cases import assert_tires_hold_the_truth, independent_diagnosis  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def flying_fronts(tmp_path_factory):
-    rec, cutoff, truth = independent_recording("corners point", 151, tmp_path_factory.mktemp("independent"))
-    return diagnose_tractor(rec, cutoff_hz=cutoff), truth
+    return independent_diagnosis("corners point", 151, tmp_path_factory.mktemp("independent"))
 
 
 def test_front_wheels_that_fly_are_named_lift_off_and_every_tire_holds_the_truth(flying_fronts):

@@ -336,15 +336,25 @@ def _periodic(fit, base):
     pre = t < pb.first_impact_s - 0.05
     line = tire, f, amp, ratio = _strongest_line(fit, base)
     pre_amp, _ = spectral_line(pb.rec.accel_m_s2[tire][pre], pb.rec.sample_rate_hz, f)
-    text = (f"{f:.2f} Hz line of {amp:.2f} m/s^2 in {tire} all through the residual ({ratio:.0f}x the spectral "
+    removed = _line_removed(fit, base, line)
+    text = (f"{f:.2f} Hz line of {amp:.2f} m/s^2 in {tire} all through the residual ({ratio:.1f}x the spectral "
             f"floor), {pre_amp:.2f} m/s^2 already before the impact: steady, at speed / {pb.rec.speed_m_s / f:.3f} m; "
-            f"the extended model removes {_line_removed(fit, base, line):.0%} of the line's energy")
+            f"the extended model removes {removed:.0%} of the line's energy")
     if f >= ENGINE_BAND_HZ[0]:
         # the conditioning removes an engine by its orders; one line alone looks the same as the lugs or the road
         text += (f"; the line lies in the engine band (from {ENGINE_BAND_HZ[0]:.0f} Hz) and an engine line without "
                  f"orders looks the same in one recording: one whose frequency does not follow the speed between "
                  f"runs is the engine's")
-    return ratio >= 8.0 and pre_amp >= 0.5 * amp, text
+    prominent = ratio >= LINE_RATIO or (ratio >= REPRODUCED_LINE_RATIO and removed >= REPRODUCED_SHARE)
+    return prominent and pre_amp >= 0.5 * amp, text
+
+
+#: A residual line this many times its spectral floor, steady before the impact, is a periodic disturbance.
+LINE_RATIO = 8.0
+#: ... or this many times, where the extended model removes at least REPRODUCED_SHARE of its energy (the share
+#: the selection asks of a line candidate that qualifies on its line, joint_select.MIN_LOCAL_GAIN).
+REPRODUCED_LINE_RATIO = 5.0
+REPRODUCED_SHARE = 0.75
 
 
 _CHECKS = {"enveloping": _enveloping, "lift_off": _lift_off, "axle_coupling": _axle, "roll_coupling": _roll,
