@@ -28,6 +28,7 @@ from importlib import resources
 from pathlib import Path
 
 from .kinds import FmuKind
+from identification._compile import cache_root
 from identification._files import temp_prefix
 
 __all__ = ["PLATFORMS", "FMI_VERSIONS", "cache_dir", "source_files", "law_version", "compile_binary",
@@ -57,16 +58,10 @@ _FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform
 _FLAGS = ("-shared", "-std=c99", "-O2", "-g0", "-fvisibility=hidden", "-ffp-contract=off", "-fno-fast-math")
 #: Version of the compile-and-link recipe beyond the flags (install name, PE post-processing); part of the cache key.
 _RECIPE = "2"
-#: Environment variable that overrides the cache folder.
-CACHE_ENV = "CLEATFMU_CACHE_DIR"
-
-
 def cache_dir() -> Path:
-    """Folder of the compiled binaries: $CLEATFMU_CACHE_DIR, else $XDG_CACHE_HOME/cleatfmu, else ~/.cache/cleatfmu."""
-    if os.environ.get(CACHE_ENV):
-        return Path(os.environ[CACHE_ENV])
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base, "cleatfmu")
+    """Folder of the compiled binaries: $CLEATFMU_CACHE_DIR, else $XDG_CACHE_HOME/cleatfmu, else ~/.cache/cleatfmu
+    (:func:`identification._compile.cache_root`)."""
+    return cache_root()
 
 
 def _fmpy_headers() -> Path:

@@ -96,3 +96,22 @@ def test_a_first_run_says_it_compiles_and_a_second_does_not(tmp_path):
     second = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300)
     assert second.returncode == 0, second.stderr
     assert "compiling" not in second.stderr and second.stdout.split() == ["True"]
+    # the same source in another folder (a reinstall, a checkout beside its installed copy; its files newer)
+    # loads that compilation; one module changed anywhere in the package compiles afresh
+    import shutil
+    from pathlib import Path
+
+    import identification
+
+    for name, change in (("copy", None), ("changed", "tire_law.py")):
+        shutil.copytree(Path(identification.__file__).parent, tmp_path / name / "identification",
+                        ignore=shutil.ignore_patterns("__pycache__"))
+        if change:
+            with open(tmp_path / name / "identification" / "model" / change, "a", encoding="utf-8") as f:
+                f.write("\n# changed\n")
+        again = subprocess.run([sys.executable, "-c", code + "import identification; print(identification.__file__)"],
+                               env=env, capture_output=True, text=True, timeout=300, cwd=tmp_path / name)
+        assert again.returncode == 0, again.stderr
+        assert again.stdout.split()[-1].startswith(str(tmp_path / name)), again.stdout
+        assert again.stdout.split()[0] == ("False" if change else "True"), (name, again.stdout, again.stderr)
+        assert ("compiling" in again.stderr) == bool(change), (name, again.stderr)

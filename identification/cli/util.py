@@ -31,13 +31,14 @@ _TIRES = ("FL", "FR", "RL", "RR")
 
 def announce_compilation() -> None:
     """Say on stderr, before a command steps the model, that its compiled code is built first (once per
-    install: a first run takes some seconds longer, and nothing else would say why)."""
+    version of the package: a first run takes some seconds longer, and nothing else would say why)."""
     import sys
 
+    from .._compile import user_cache_dir
     from ..model.kernels import compiled_on_disk
     if not compiled_on_disk():
-        print("cleatfmu: compiling the model's stepping code for this install (once; about 5-10 s)...",
-              file=sys.stderr, flush=True)
+        print(f"cleatfmu: compiling the model's stepping code for this version (once, about 5-10 s; kept in "
+              f"{user_cache_dir()})...", file=sys.stderr, flush=True)
 
 
 def normalize_tire(name: str) -> str:

@@ -177,8 +177,8 @@ def _coarse_min_arrays(energy, crossed, front, back, fit_scale):
 
 
 try:
-    import numba
-    _coarse_min = numba.njit(cache=True)(_coarse_min)
+    from .._compile import njit
+    _coarse_min = njit()(_coarse_min)
 except ImportError:   # pragma: no cover - numba is a dependency
     _coarse_min = _coarse_min_arrays
 

@@ -149,12 +149,14 @@ def _chain_kernel():
     global hold
     if "chain" not in _COMPILED:
         try:
-            import numba
+            import numba  # noqa: F401 - without it, plain Python
+
+            from .._compile import njit
         except ImportError:   # pragma: no cover - numba is a dependency
             _COMPILED["chain"] = _chain
         else:
-            hold = numba.njit(cache=True)(hold)
-            _COMPILED["chain"] = numba.njit(cache=True)(_chain)
+            hold = njit()(hold)
+            _COMPILED["chain"] = njit()(_chain)
     return _COMPILED["chain"]
 
 

@@ -26,12 +26,14 @@ def _compiled(fn, helpers: dict, inline: str = "never"):
     With ``inline="always"`` numba inlines it into its caller: the law into the stepping loop, where LLVM
     would not inline it by itself once it holds the bevel's code (measured: the loop 60 % slower)."""
     env = dict(fn.__globals__, **helpers)
-    return numba.njit(cache=True, fastmath=False, inline=inline)(
+    return njit(fastmath=False, inline=inline)(
         types.FunctionType(fn.__code__, env, fn.__name__, fn.__defaults__))
 
 
 try:   # pragma: no cover - numba is a dependency; the fallback keeps the package importable without it
     import numba
+
+    from .._compile import njit
     _bevel = _compiled(tire_law.bevel_cleat, {})
     _footprint = _compiled(tire_law.footprint_cleat, {"bevel_cleat": _bevel})
     _lug = _compiled(tire_law.lug_road, {}, "always")
@@ -144,7 +146,9 @@ def drop_stale_cache(stem: str, tag: str, dependency) -> None:
     with an older version of what it calls from another module (the tire law
     :func:`identification.model.tire_law.tire_force`, the chain's
     :func:`identification.model.acquisition.hold`) would be reused; a marker named
-    ``<stem>.<tag>-<hash of the dependency's source>`` tells the versions apart.
+    ``<stem>.<tag>-<hash of the dependency's source>`` tells the versions apart.  Only where the package's
+    own cache folder cannot be written (:func:`identification._compile.install_cache_locator`, one folder
+    per version of the whole package's source) does numba use that ``__pycache__``.
     """
     import hashlib
     import inspect
@@ -164,7 +168,7 @@ def drop_stale_cache(stem: str, tag: str, dependency) -> None:
 
 if numba is not None:
     drop_stale_cache("kernels", "law", tire_law)
-    _step = numba.njit(cache=True, fastmath=False)(_step)
+    _step = njit(fastmath=False)(_step)
 
 
 def compiled_on_disk() -> bool:

@@ -39,6 +39,8 @@ __all__ = ["sensed_lowpassed", "sensed_lowpassed_reference", "sensed_acceleratio
 
 try:   # pragma: no cover - numba is a dependency; without it the reference is used
     import numba
+
+    from .._compile import njit
 except ImportError:   # pragma: no cover
     numba = None
 
@@ -394,8 +396,8 @@ def _filtfilt_rows(x, sos, zi, edge):
 _hold = getattr(acquisition.hold, "py_func", acquisition.hold)     # the plain function, compiled here
 if numba is not None:
     drop_stale_cache("sensing", "acquisition", acquisition)
-    _hold = numba.njit(cache=True)(_hold)
+    _hold = njit()(_hold)
     _locate, _interp_at, _guess, _cells, _smooth, _impulse_sums, _count_at_or_before, _grid_velocity, \
-        _mean_rows, _chain_rows, _filtfilt_rows = (numba.njit(cache=True)(f) for f in (
+        _mean_rows, _chain_rows, _filtfilt_rows = (njit()(f) for f in (
             _locate, _interp_at, _guess, _cells, _smooth, _impulse_sums, _count_at_or_before, _grid_velocity,
             _mean_rows, _chain_rows, _filtfilt_rows))
