@@ -53,8 +53,9 @@ def compile_seconds():
 # or the same code in another folder, loads what an earlier one compiled, and any change of any module
 # (a kernel compiled with code it calls from another file) compiles afresh.
 
-#: Versions of the package's source kept in the cache folder besides the one in use.
-KEEP_VERSIONS = 5
+#: Versions of the package's source kept in the cache folder besides the one in use, and the days after which
+#: an older one unused is removed (not sooner: another checkout may be running it).
+KEEP_VERSIONS, KEEP_DAYS = 5, 7
 
 _STATE: dict = {}
 
@@ -101,15 +102,18 @@ def source_stamp() -> str:
 
 
 def _prune(version_dir) -> None:
-    """Keep the folder of the version in use and the `KEEP_VERSIONS` most recently used others."""
+    """Keep the folder of the version in use and the `KEEP_VERSIONS` most recently used others; remove the
+    rest once unused for `KEEP_DAYS` days (a version's folder is touched by every process that uses it)."""
     import os
     import shutil
+    import time
 
     os.utime(version_dir)
     others = sorted((p for p in version_dir.parent.glob("cleatfmu-*") if p.is_dir() and p != version_dir),
                     key=lambda p: p.stat().st_mtime, reverse=True)
     for old in others[KEEP_VERSIONS:]:
-        shutil.rmtree(old, ignore_errors=True)
+        if time.time() - old.stat().st_mtime > KEEP_DAYS * 86400:
+            shutil.rmtree(old, ignore_errors=True)
 
 
 def install_cache_locator() -> bool:

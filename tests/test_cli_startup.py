@@ -115,3 +115,27 @@ def test_a_first_run_says_it_compiles_and_a_second_does_not(tmp_path):
         assert again.stdout.split()[-1].startswith(str(tmp_path / name)), again.stdout
         assert again.stdout.split()[0] == ("False" if change else "True"), (name, again.stdout, again.stderr)
         assert ("compiling" in again.stderr) == bool(change), (name, again.stderr)
+
+
+def test_the_cache_keeps_recent_versions_and_removes_old_unused_ones(tmp_path):
+    """Beside the version in use, the five most recently used versions stay, and of the others only those
+    unused for over a week are removed (another checkout may still be running a recent one)."""
+    import os
+    import time
+
+    from identification._compile import _prune
+
+    now = time.time()
+    ages_days = {f"cleatfmu-{i:02d}": age for i, age in enumerate([0.1, 0.2, 1, 2, 3, 4, 5, 8, 30, 400])}
+    for name, age in ages_days.items():
+        (tmp_path / name / "model").mkdir(parents=True)
+        os.utime(tmp_path / name, (now - age * 86400, now - age * 86400))
+    (tmp_path / "other_library").mkdir()
+    os.utime(tmp_path / "other_library", (now - 400 * 86400, now - 400 * 86400))
+    current = tmp_path / "cleatfmu-in-use"
+    current.mkdir()
+    _prune(current)
+    kept = sorted(p.name for p in tmp_path.iterdir())
+    assert kept == sorted(["cleatfmu-00", "cleatfmu-01", "cleatfmu-02", "cleatfmu-03", "cleatfmu-04",
+                           "cleatfmu-05", "cleatfmu-06", "cleatfmu-in-use", "other_library"])
+    assert time.time() - current.stat().st_mtime < 60
