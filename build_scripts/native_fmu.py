@@ -40,7 +40,7 @@ def equilibrium_starts(kind: FmuKind, starts: dict, given: dict, static_load_n: 
     touches the built-in cleat is moved 1 m before it, so that the default
     experiment does not park the tire on the cleat.
     """
-    from identification.model.tire_law import footprint_cleat, lug_road
+    from identification.model.tire_law import footprint_cleat, lug_road, ring_cleat, static_deflection
 
     out = dict(starts)
     load = static_load_n
@@ -50,13 +50,24 @@ def equilibrium_starts(kind: FmuKind, starts: dict, given: dict, static_load_n: 
     deflection = (n if n != 1.0 else 1.0) * load / starts["stiffness"]
     road = starts.get("road_z", 0.0)
     if "hub_x" in starts:
+        ring = bool(starts.get("ring_envelope", False) and starts.get("footprint_length", 0.0) > 0.0
+                    and starts.get("cleat_height", 0.0) and starts.get("static_load", 0.0) > 0.0)
+        sink = static_deflection(starts["stiffness"], n, starts["static_load"]) if ring else 0.0
         if starts.get("cleat_height", 0.0) and "hub_x" not in given:
             reach = starts["cleat_x"] - 0.5 * starts["footprint_length"]
+            if ring:   # the ring touches a cleat sqrt(2 R (deflection + H)) ahead, R = footprint^2 / (8 sink)
+                radius = starts["footprint_length"] ** 2 / (8.0 * sink)
+                reach = (starts["cleat_x"] + 0.5 * starts.get("cleat_bevel", 0.0)
+                         - math.sqrt(2.0 * radius * (max(deflection, 0.0) + starts["cleat_height"])))
             if starts["hub_x"] >= reach - 1e-9:
                 out["hub_x"] = reach - 1.0
-        cleat, _ = footprint_cleat(out["hub_x"], starts["footprint_length"], starts["cleat_x"],
-                                   starts["cleat_height"], starts["cleat_width"],
-                                   starts.get("parabolic_pressure", False), starts.get("cleat_bevel", 0.0))
+        if ring:
+            cleat, _ = ring_cleat(out["hub_x"], deflection, starts["footprint_length"], starts["cleat_x"],
+                                  starts["cleat_height"], starts["cleat_width"], sink, starts.get("cleat_bevel", 0.0))
+        else:
+            cleat, _ = footprint_cleat(out["hub_x"], starts["footprint_length"], starts["cleat_x"],
+                                       starts["cleat_height"], starts["cleat_width"],
+                                       starts.get("parabolic_pressure", False), starts.get("cleat_bevel", 0.0))
         lug, _ = lug_road(out["hub_x"], starts["lug_amplitude"], starts["lug_pitch"], starts["lug_phase"])
         road = road + cleat + lug
     if "hub_z" not in given:

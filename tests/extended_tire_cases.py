@@ -8,15 +8,17 @@ import identification.model.tire_law as law
 
 KIND = "extended_tire"
 INPUTS = ["hub_z", "hub_vz", "road_z", "road_vz", "hub_x", "hub_vx"]
-BOOL_PARAMS = ["unilateral", "parabolic_pressure"]
+BOOL_PARAMS = ["unilateral", "parabolic_pressure", "ring_envelope"]
 REAL_PARAMS = [n for n in law.EXTENDED_DEFAULTS if n not in BOOL_PARAMS]
 REAL_OUTPUTS = ["force_z", "deflection", "deflection_rate", "road_effective_z"]
 OUTPUTS = REAL_OUTPUTS + ["in_contact"]
 #: Option sets of the random cases; "footprint" has a uniform contact pressure, "parabolic" a parabolic one;
 #: "bevel" makes the built-in cleat a trapezoid (with a uniform footprint unless combined with "parabolic" or
-#: "point_cleat"). The last set switches every option on (the footprint parabolic, the cleat bevelled).
+#: "point_cleat"); "ring" sees the cleat through a rigid ring over an elastic bed. The last two sets switch
+#: every option on (the ring's envelope, then the footprint parabolic; the cleat bevelled).
 OPTION_SETS = [("footprint",), ("point_cleat",), ("unilateral",), ("progressive",), ("friction",), ("lugs",),
                ("parabolic",), ("bevel",), ("bevel", "parabolic"), ("bevel", "point_cleat"),
+               ("ring",), ("ring", "bevel"), ("ring", "bevel", "unilateral", "progressive", "friction", "lugs"),
                ("parabolic", "bevel", "unilateral", "progressive", "friction", "lugs")]
 
 
@@ -24,7 +26,7 @@ def random_parameters(rng, options) -> dict:
     """A valid parameter set with random k, c, r0 and the given options switched on."""
     p = dict(law.EXTENDED_DEFAULTS, stiffness=rng.uniform(1e5, 1.5e6), damping=rng.uniform(0.0, 2e4),
              unloaded_radius=rng.uniform(0.4, 1.0))
-    footprint = ("footprint" in options or "parabolic" in options
+    footprint = ("footprint" in options or "parabolic" in options or "ring" in options
                  or ("bevel" in options and "point_cleat" not in options))
     if footprint or "point_cleat" in options:
         p.update(footprint_length=rng.uniform(0.05, 0.5) if footprint else 0.0,
@@ -35,6 +37,8 @@ def random_parameters(rng, options) -> dict:
         p["cleat_bevel"] = half if rng.random() < 0.2 else half * (1.0 - rng.random())
     if "parabolic" in options:
         p["parabolic_pressure"] = True
+    if "ring" in options:
+        p.update(ring_envelope=True, static_load=rng.uniform(5e3, 4e4))
     if "unilateral" in options:
         p["unilateral"] = True
     if "progressive" in options:

@@ -30,7 +30,7 @@ VALUE_REFERENCES = ["hub_z", "hub_vz", "road_z", "road_vz", "hub_x", "hub_vx", "
                     "stiffness_exponent", "static_load", "friction_force", "friction_velocity", "lug_amplitude",
                     "lug_pitch", "lug_phase", "force_z", "deflection", "deflection_rate", "in_contact",
                     "road_effective_z",
-                    "parabolic_pressure", "cleat_bevel"]  # appended, in this order
+                    "parabolic_pressure", "cleat_bevel", "ring_envelope"]  # appended, in this order
 
 
 def test_value_references_of_existing_variables_never_change(fmu, vr):
@@ -391,8 +391,9 @@ EXPECTED_UNITS = {"hub_z": "m", "hub_vz": "m/s", "road_z": "m", "road_vz": "m/s"
                   "road_effective_z": "m", "cleat_bevel": "m"}
 EXPECTED_INPUT_DEPENDENCIES = {"force_z": set(INPUTS), "in_contact": set(INPUTS),
                                "deflection": {"hub_z", "road_z", "hub_x"},
-                               "deflection_rate": {"hub_vz", "road_vz", "hub_x", "hub_vx"},
-                               "road_effective_z": {"road_z", "hub_x"}}
+                               # the ring's equivalent cleat depends on the hub's deflection over the road
+                               "deflection_rate": {"hub_z", "hub_vz", "road_z", "road_vz", "hub_x", "hub_vx"},
+                               "road_effective_z": {"hub_z", "road_z", "hub_x"}}
 
 
 def test_compliance_units_descriptions_and_experiment(fmu):
@@ -403,7 +404,7 @@ def test_compliance_units_descriptions_and_experiment(fmu):
     root = model_description(fmu)
     units = {u.get("name") for u in root.find("UnitDefinitions")}
     variables = {sv.get("name"): sv for sv in root.iter("ScalarVariable")}
-    assert set(variables) == set(EXPECTED_UNITS) | {"unilateral", "parabolic_pressure", "in_contact"}
+    assert set(variables) == set(EXPECTED_UNITS) | {"unilateral", "parabolic_pressure", "ring_envelope", "in_contact"}
     for name, sv in variables.items():
         assert sv.get("description"), name
         if name in EXPECTED_UNITS:
@@ -432,8 +433,8 @@ def test_declared_dependencies_hold_numerically(slave, vr):
     kinds = {v.name: v.depends for v in load_kind(KIND).variables if v.causality == "output"}
     rng = np.random.default_rng(5)
     changed = {(out, i): False for out in OUTPUTS for i in EXPECTED_INPUT_DEPENDENCIES[out]}
-    for _ in range(40):
-        p = random_parameters(rng, OPTION_SETS[-1])
+    for draw in range(80):   # every option on, the footprint parabolic or the ring's
+        p = random_parameters(rng, OPTION_SETS[-1 - draw % 2])
         set_parameters(s, vr, p)
         u = random_inputs(rng, p)
         s.setReal([vr[n] for n in INPUTS], u)
@@ -472,7 +473,7 @@ def test_build_writes_every_start_value_including_the_boolean_and_the_descriptio
     s = open_fmpy_slave(fmu)
     try:
         assert s.getReal([vr[n] for n in REAL_PARAMS]) == [starts[n] for n in REAL_PARAMS]
-        assert s.getBoolean([vr[n] for n in BOOL_PARAMS]) == [1, 1]
+        assert s.getBoolean([vr[n] for n in BOOL_PARAMS]) == [1, 1, 0]
         assert s.getReal([vr["hub_z"]]) == [0.8]
     finally:
         s.freeInstance()

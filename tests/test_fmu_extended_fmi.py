@@ -46,8 +46,8 @@ def test_two_fmus_of_the_kind_keep_their_own_parameters(fmu, tmp_path, vr):
         assert read_outputs(a, vr) == law_outputs(u, law.EXTENDED_DEFAULTS)  # bilateral: pulls
         assert read_outputs(b, vr) == law_outputs(u, other_p)
         assert read_outputs(a, vr)[0] < 0 and read_outputs(b, vr)[-1] is True
-        assert a.getBoolean([vr[n] for n in BOOL_PARAMS]) == [0, 0]
-        assert b.getBoolean([vr[n] for n in BOOL_PARAMS]) == [1, 1]
+        assert a.getBoolean([vr[n] for n in BOOL_PARAMS]) == [0, 0, 0]
+        assert b.getBoolean([vr[n] for n in BOOL_PARAMS]) == [1, 1, 0]
     finally:
         a.freeInstance()
         b.freeInstance()
@@ -60,11 +60,14 @@ def test_the_co_simulation_master_reads_and_sets_both_booleans(tmp_path):
     with TireFmu(fmu) as tire:
         tire.initialize(0.0)
         params = tire.parameters()
-        assert {n: params[n] for n in BOOL_PARAMS} == {"unilateral": False, "parabolic_pressure": True}
+        assert {n: params[n] for n in BOOL_PARAMS} == {"unilateral": False, "parabolic_pressure": True,
+                                                       "ring_envelope": False}
         assert all(type(params[n]) is float for n in REAL_PARAMS)
-    with TireFmu(fmu, start_values={"unilateral": True, "parabolic_pressure": False}) as tire:
+    with TireFmu(fmu, start_values={"unilateral": True, "parabolic_pressure": False, "ring_envelope": True,
+                                    "static_load": 12000.0}) as tire:
         tire.initialize(0.0)
-        assert {n: tire.parameters()[n] for n in BOOL_PARAMS} == {"unilateral": True, "parabolic_pressure": False}
+        assert {n: tire.parameters()[n] for n in BOOL_PARAMS} == {"unilateral": True, "parabolic_pressure": False,
+                                                                   "ring_envelope": True}
 
 
 # -- FMU state and reset ------------------------------------------------------------------------
@@ -82,7 +85,7 @@ def test_state_round_trip_is_bit_identical_and_carries_the_parameters(fmu, vr):
         assert s.getReal([vr[n] for n in INPUTS]) == inputs[0]
 
     def copied(t):  # t started with the default (bilateral, uniform footprint, linear) parameters
-        assert t.getBoolean([vr[n] for n in BOOL_PARAMS]) == [1, 1]
+        assert t.getBoolean([vr[n] for n in BOOL_PARAMS]) == [1, 1, 0]
 
     first = assert_state_round_trip(fmu, prepare, lambda s: run_steps(s, vr, INPUTS, inputs,
                                                                       lambda s: read_outputs(s, vr)),

@@ -63,8 +63,9 @@ def test_progressive_tire_starts_at_its_equilibrium_off_the_built_in_cleat(tmp_p
 
 
 def _draw_extended(rng):
-    """Random parameters (each option on or off, the footprint's pressure uniform or parabolic, the built-in
-    cleat rectangular or, in half the cases, bevelled with b in (0, w/2]) and inputs near the built-in cleat."""
+    """Random parameters (each option on or off, the footprint's pressure uniform or parabolic, or in 30 % of
+    the cases the ring's envelope, the built-in cleat rectangular or, in half the cases, bevelled with
+    b in (0, w/2]) and inputs near the built-in cleat."""
     on = rng.random(6) < 0.6
     p = {"stiffness": rng.uniform(1e5, 1e6), "damping": rng.uniform(0.0, 8e3), "unloaded_radius": rng.uniform(0.4, 1.0),
          "footprint_length": rng.uniform(0.05, 0.5) if on[0] else 0.0, "cleat_x": rng.uniform(-0.5, 0.5),
@@ -73,7 +74,7 @@ def _draw_extended(rng):
          "static_load": rng.uniform(5e3, 3e4), "friction_force": rng.uniform(0.0, 800.0) if on[4] else 0.0,
          "friction_velocity": rng.uniform(1e-3, 0.1), "lug_amplitude": rng.uniform(-3e-3, 3e-3) if on[5] else 0.0,
          "lug_pitch": rng.uniform(0.1, 0.5), "lug_phase": rng.uniform(-4.0, 4.0),
-         "parabolic_pressure": bool(rng.random() < 0.5)}
+         "parabolic_pressure": bool(rng.random() < 0.5), "ring_envelope": bool(rng.random() < 0.3)}
     p["cleat_bevel"] = 0.5 * p["cleat_width"] * (1.0 - rng.random()) if rng.random() < 0.5 else 0.0
     deflection = p["stiffness_exponent"] * p["static_load"] / p["stiffness"]
     u = {"hub_z": p["unloaded_radius"] - deflection + rng.uniform(-0.08, 0.08), "hub_vz": rng.normal(0, 0.5),
@@ -89,10 +90,11 @@ def _agree(got, want, what):
 def test_c_law_agrees_with_the_python_law_on_random_inputs_over_every_option(native_fmus):
     fmu = native_fmus["extended_tire"]
     refs = variable_refs(fmu)
-    flags = ["unilateral", "parabolic_pressure"]
+    flags = ["unilateral", "parabolic_pressure", "ring_envelope"]
     real_params = [n for n in tire_law.EXTENDED_DEFAULTS if n not in flags]
     outputs = ["force_z", "deflection", "deflection_rate", "road_effective_z"]
     rng = np.random.default_rng(20261123)
+    rings = 0
     s = open_fmpy_slave(fmu)
     seen_contact, footprints = set(), {False: 0, True: 0}
     bevels = {"point contact": 0, "uniform": 0, "parabolic": 0}
@@ -110,6 +112,10 @@ def test_c_law_agrees_with_the_python_law_on_random_inputs_over_every_option(nat
                 _agree(a, b, f"draw {i}: {name}")
             assert bool(contact) == bool(c), f"draw {i}"
             seen_contact.add((p["unilateral"], bool(c)))
+            if p["ring_envelope"] and p["footprint_length"] > 0.0 and p["cleat_height"] > 0.0:
+                rings += road != u["road_z"] + tire_law.lug_road(u["hub_x"], p["lug_amplitude"], p["lug_pitch"],
+                                                                  p["lug_phase"])[0]   # the ring on the cleat
+                continue
             cleat, slope = tire_law.footprint_cleat(u["hub_x"], p["footprint_length"], p["cleat_x"],
                                                     p["cleat_height"], p["cleat_width"], p["parabolic_pressure"],
                                                     p["cleat_bevel"])
@@ -123,6 +129,7 @@ def test_c_law_agrees_with_the_python_law_on_random_inputs_over_every_option(nat
     finally:
         s.freeInstance()
     assert seen_contact == {(False, False), (False, True), (True, False), (True, True)}
+    assert rings >= 300, rings   # the ring's envelope on the cleat
     assert min(footprints.values()) >= 100, footprints  # both footprint pressures on the cleat's ramps
     # bevelled cleats on the ramps: under the contact point (on a bevel) and partly in both footprint pressures
     assert bevels["point contact"] >= 40 and min(bevels["uniform"], bevels["parabolic"]) >= 150, bevels

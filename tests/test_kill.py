@@ -182,8 +182,12 @@ def test_sigterm_or_sigint_during_export_over_an_older_fmu_leaves_the_older_or_t
                 assert b"400000" in z.read("modelDescription.xml")
             outcomes.add("new")
             fmu.write_bytes(older)
-        # 0: done first; 130/143: answered; -2/-15: the signal came in the interpreter's own start-up
-        assert proc.returncode in (0, 130, 143, -signal.SIGINT, -signal.SIGTERM), (proc.returncode, stderr)
+        # 0: done first; 130/143: answered; -2/-15, or 1 with a KeyboardInterrupt in none of our frames (the
+        # interpreter's "Could not import runpy module" or "Failed to import the site module", seen on a loaded
+        # machine): the signal came in the interpreter's own start-up, before any of ours ran
+        startup = (proc.returncode == 1 and "KeyboardInterrupt" in stderr and "identification" not in stderr
+                   and ("Could not import runpy module" in stderr or "Failed to import the site module" in stderr))
+        assert proc.returncode in (0, 130, 143, -signal.SIGINT, -signal.SIGTERM) or startup, (proc.returncode, stderr)
     assert "older" in outcomes
     assert sorted(p.name for p in tmpdir.iterdir()) == []
 

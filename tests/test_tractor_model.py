@@ -33,6 +33,8 @@ def _record(body_kw, *, options=None, seed=0):
             if opt == "footprint":
                 p.update(footprint_length=rng.uniform(0.2, 0.5), cleat_height=H, cleat_width=W,
                          cleat_bevel=BEVEL if "bevel" in options else 0.0)
+            elif opt == "ring":
+                p.update(ring_envelope=True)
             elif opt == "unilateral":
                 p.update(unilateral=True)
             elif opt == "exponent":
@@ -48,8 +50,9 @@ def _record(body_kw, *, options=None, seed=0):
 
 
 @pytest.mark.parametrize("options", [(), ("footprint",), ("unilateral",), ("exponent",), ("friction",), ("lugs",),
-                                     ("bevel",), ("footprint", "bevel"),
-                                     ("footprint", "unilateral", "exponent", "friction", "lugs")])
+                                     ("bevel",), ("footprint", "bevel"), ("footprint", "ring"),
+                                     ("footprint", "unilateral", "exponent", "friction", "lugs"),
+                                     ("footprint", "ring", "bevel", "unilateral", "exponent", "friction", "lugs")])
 @pytest.mark.parametrize("body", BODIES, ids=lambda b: "+".join(b) or "corners")
 def test_compiled_stepping_equals_the_reference(body, options):
     model = _record(body, options=options, seed=len(options))

@@ -6,7 +6,7 @@ with the options of ``identification/model/tire_law.py`` (:func:`extended_tire`)
 each a tunable parameter whose default switches it off — a built-in
 cleat, rectangular or bevelled (a trapezoid, ``cleat_bevel``), enveloped by a
 footprint (uniform contact pressure, or parabolic with
-``parabolic_pressure``), road-equivalent lugs, progressive
+``parabolic_pressure``, or a rigid ring over an elastic bed with ``ring_envelope``), road-equivalent lugs, progressive
 stiffness, regularised Coulomb friction and unilateral contact.  With every
 option at its default the force is the point-contact tire's.
 
@@ -24,8 +24,8 @@ Runtime contract (this file runs inside the FMU, on the importing machine):
   state, so that several FMUs of this kind in one process each keep theirs;
 * importers set parameters one at a time, so a value is refused when set only
   if it is invalid by itself (:func:`_value_problem`); the constraints
-  between parameters (static_load > 0 N when stiffness_exponent != 1,
-  cleat_bevel <= cleat_width / 2) make the next evaluation, step or exit
+  between parameters (static_load > 0 N when stiffness_exponent != 1 or
+  ring_envelope, cleat_bevel <= cleat_width / 2) make the next evaluation, step or exit
   from initialization mode fail until they hold.
 """
 
@@ -45,8 +45,8 @@ STATE_FORMAT = "cleatfmu_extended_tire/1"
 #: ``cleatfmu_extended_tire_table`` (read its docstring); the parameters'
 #: starts are ``tire_law.EXTENDED_DEFAULTS``.  The build reads this literal,
 #: without importing this file, to write units, descriptions and the model
-#: structure.  A new variable is appended (as ``parabolic_pressure`` and
-#: ``cleat_bevel`` were), so that the value references of the others never
+#: structure.  A new variable is appended (as ``parabolic_pressure``,
+#: ``cleat_bevel`` and ``ring_envelope`` were), so that the value references of the others never
 #: change; the native FMU's table (``fmu_src/native/extended_tire/config.h``)
 #: must list the same rows.
 VARIABLES = (
@@ -105,20 +105,21 @@ VARIABLES = (
       "cleat_height": "dependent", "cleat_width": "dependent", "unilateral": "dependent",
       "stiffness_exponent": "dependent", "static_load": "dependent", "friction_force": "dependent",
       "friction_velocity": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent",
-      "lug_phase": "dependent", "parabolic_pressure": "dependent", "cleat_bevel": "dependent"},
+      "lug_phase": "dependent", "parabolic_pressure": "dependent", "cleat_bevel": "dependent", "ring_envelope": "dependent"},
      "Vertical tire force on the hub, N, compressive positive (pushes the hub up): elastic force + "
      "damping*deflection_rate + friction; 0 N when unilateral and not in_contact"),
     ("deflection", "Real", "output", "continuous", "m", None,
-     {"hub_z": "constant", "road_z": "constant", "hub_x": "dependent", "unloaded_radius": "constant",
+     {"hub_z": "dependent", "road_z": "dependent", "hub_x": "dependent", "unloaded_radius": "dependent",
       "footprint_length": "dependent", "cleat_x": "dependent", "cleat_height": "dependent",
       "cleat_width": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent", "lug_phase": "dependent",
-      "parabolic_pressure": "dependent", "cleat_bevel": "dependent"},
+      "parabolic_pressure": "dependent", "cleat_bevel": "dependent", "ring_envelope": "dependent"},
      "Tire deflection unloaded_radius - (hub_z - road_effective_z), m (positive = compressed)"),
     ("deflection_rate", "Real", "output", "continuous", "m/s", None,
-     {"hub_vz": "constant", "road_vz": "constant", "hub_x": "dependent", "hub_vx": "dependent",
+     {"hub_z": "dependent", "hub_vz": "constant", "road_z": "dependent", "road_vz": "constant",
+      "hub_x": "dependent", "hub_vx": "dependent",
       "footprint_length": "dependent", "cleat_x": "dependent", "cleat_height": "dependent",
       "cleat_width": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent", "lug_phase": "dependent",
-      "parabolic_pressure": "dependent", "cleat_bevel": "dependent"},
+      "parabolic_pressure": "dependent", "cleat_bevel": "dependent", "ring_envelope": "dependent"},
      "Deflection rate road_vz + (slope of cleat and lugs along x)*hub_vx - hub_vz, m/s (positive = compressing)"),
     ("in_contact", "Boolean", "output", "discrete", "", None,
      {"hub_z": "dependent", "hub_vz": "dependent", "road_z": "dependent", "road_vz": "dependent",
@@ -127,14 +128,16 @@ VARIABLES = (
       "cleat_height": "dependent", "cleat_width": "dependent", "unilateral": "dependent",
       "stiffness_exponent": "dependent", "static_load": "dependent", "friction_force": "dependent",
       "friction_velocity": "dependent", "lug_amplitude": "dependent", "lug_pitch": "dependent",
-      "lug_phase": "dependent", "parabolic_pressure": "dependent", "cleat_bevel": "dependent"},
+      "lug_phase": "dependent", "parabolic_pressure": "dependent", "cleat_bevel": "dependent", "ring_envelope": "dependent"},
      "Contact flag, dimensionless: deflection > 0 m, and when unilateral also force_z > 0 N"),
     ("road_effective_z", "Real", "output", "continuous", "m", None,
-     {"road_z": "constant", "hub_x": "dependent", "footprint_length": "dependent", "cleat_x": "dependent",
+     {"hub_z": "dependent", "road_z": "dependent", "hub_x": "dependent", "footprint_length": "dependent",
+      "cleat_x": "dependent",
       "cleat_height": "dependent", "cleat_width": "dependent", "lug_amplitude": "dependent",
       "lug_pitch": "dependent", "lug_phase": "dependent", "parabolic_pressure": "dependent",
-      "cleat_bevel": "dependent"},
-     "Effective road height the tire feels, m: road_z + built-in cleat averaged over the footprint + lugs"),
+      "cleat_bevel": "dependent", "ring_envelope": "dependent"},
+     "Effective road height the tire feels, m: road_z + built-in cleat averaged over the footprint (with "
+     "ring_envelope: its equivalent height at the hub's deflection) + lugs"),
     ("parabolic_pressure", "Boolean", "parameter", "tunable", "", False, {},
      "Parabolic footprint pressure, dimensionless: when true the built-in cleat is averaged over the footprint "
      "weighted by a contact pressure proportional to 1 - (2*xi/footprint_length)^2 (xi: distance from the "
@@ -144,6 +147,13 @@ VARIABLES = (
      "Bevel b of the built-in cleat, m (>= 0; <= cleat_width/2): the cleat rises linearly from 0 m to "
      "cleat_height over b from its leading edge cleat_x and falls linearly to 0 m over b to its trailing edge "
      "cleat_x + cleat_width, a trapezoid; 0: a rectangular cleat with vertical edges"),
+    ("ring_envelope", "Boolean", "parameter", "tunable", "", False, {},
+     "Rigid-ring envelope, dimensionless: when true (and footprint_length > 0 m) the built-in cleat is seen "
+     "through a rigid ring of radius footprint_length^2/(8*d_W) over an elastic bed (pressure proportional to "
+     "the square root of its compression; d_W = stiffness_exponent*static_load/stiffness, so footprint_length "
+     "is the flat contact at the static load; static_load > 0 N): contact starts sqrt(2*R*(deflection + "
+     "cleat_height)) ahead of the hub, and the cleat (as the rectangle of the same area when bevelled) acts as "
+     "an equivalent height that depends on the deflection; parabolic_pressure is then not used"),
 )
 
 _VR = {row[0]: vr for vr, row in enumerate(VARIABLES)}

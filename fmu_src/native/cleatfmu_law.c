@@ -107,6 +107,30 @@ static void lug_road(double x, double amplitude, double pitch, double phase, dou
     *slope = amplitude * k * cos(arg);
 }
 
+/* Area under sqrt(s^2 - v^2) from -s to clip(u, -s, s); 0 for s <= 0 (tire_law.arc_area). */
+static double arc_area(double u, double s) {
+    double v;
+    if (s <= 0.0) return 0.0;
+    v = fmin(s, fmax(-s, u));
+    return 0.5 * (v * sqrt(s * s - v * v) + s * s * asin(v / s)) + 0.25 * CLEATFMU_PI * s * s;
+}
+
+/* The built-in cleat seen through a rigid ring over an elastic bed: equivalent height and slope
+ * (tire_law.ring_cleat); d is the hub's deflection over the road without the cleat. */
+static void ring_cleat(double x, double d, double footprint, double xc, double h, double w, double sink,
+                       double bevel, double *height, double *slope) {
+    double radius, u0, u1, sh, s0, scale;
+    radius = footprint * footprint / (8.0 * sink);
+    u0 = xc + 0.5 * bevel - x;
+    u1 = u0 + w - bevel;
+    sh = sqrt(2.0 * radius * fmax(d + h, 0.0));
+    s0 = sqrt(2.0 * radius * fmax(d, 0.0));
+    scale = 1.0 / (CLEATFMU_PI * radius);
+    *height = (arc_area(u1, sh) - arc_area(u0, sh) - arc_area(u1, s0) + arc_area(u0, s0)) * scale;
+    *slope = (sqrt(fmax(0.0, sh * sh - u0 * u0)) - sqrt(fmax(0.0, sh * sh - u1 * u1))
+              - sqrt(fmax(0.0, s0 * s0 - u0 * u0)) + sqrt(fmax(0.0, s0 * s0 - u1 * u1))) * scale;
+}
+
 /* k d, or W sign(d) |d / d_W|^n with d_W = n W / k (tire_law.elastic_force). */
 static double elastic_force(double d, double k, double n, double w) {
     double ratio;
@@ -120,9 +144,14 @@ void cleatfmu_extended_tire(double hub_z, double hub_vz, double hub_x, double hu
                             CleatfmuTireResult *out) {
     double cleat, cleat_slope, lug, lug_slope, road, d, dd, f;
     int contact;
-    footprint_cleat(hub_x, p->footprint_length, p->cleat_x, p->cleat_height, p->cleat_width,
-                    p->parabolic_pressure, p->cleat_bevel, &cleat, &cleat_slope);
     lug_road(hub_x, p->lug_amplitude, p->lug_pitch, p->lug_phase, &lug, &lug_slope);
+    if (p->ring_envelope && p->footprint_length > 0.0 && p->cleat_height != 0.0)
+        ring_cleat(hub_x, p->unloaded_radius - (hub_z - (road_z + lug)), p->footprint_length, p->cleat_x,
+                   p->cleat_height, p->cleat_width, p->stiffness_exponent * p->static_load / p->stiffness,
+                   p->cleat_bevel, &cleat, &cleat_slope);
+    else
+        footprint_cleat(hub_x, p->footprint_length, p->cleat_x, p->cleat_height, p->cleat_width,
+                        p->parabolic_pressure, p->cleat_bevel, &cleat, &cleat_slope);
     road = road_z + cleat + lug;
     d = p->unloaded_radius - (hub_z - road);
     dd = road_vz + (cleat_slope + lug_slope) * hub_vx - hub_vz;

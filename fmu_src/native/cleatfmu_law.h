@@ -30,6 +30,7 @@ typedef struct {
     double lug_phase;          /* phi, rad */
     int parabolic_pressure;    /* footprint contact pressure parabolic (else uniform) */
     double cleat_bevel;        /* b, m (0 <= b <= w / 2; 0: rectangular cleat, else a trapezoid) */
+    int ring_envelope;         /* the footprint's cleat seen through a rigid ring over an elastic bed */
 } CleatfmuTireParameters;
 
 /* Outputs of the law. */
@@ -47,7 +48,8 @@ void cleatfmu_point_contact(double hub_z, double hub_vz, double road_z, double r
                             CleatfmuTireResult *out);
 
 /* Extended tire: built-in cleat (rectangular, or bevelled: a trapezoid) averaged over
- * the footprint (uniform or parabolic contact pressure), lugs, progressive stiffness,
+ * the footprint (uniform or parabolic contact pressure) or seen through a rigid ring over
+ * an elastic bed (ring_envelope), lugs, progressive stiffness,
  * regularised Coulomb friction, unilateral contact. */
 void cleatfmu_extended_tire(double hub_z, double hub_vz, double hub_x, double hub_vx,
                             double road_z, double road_vz, const CleatfmuTireParameters *p,

@@ -70,6 +70,12 @@ int cleatfmu_set_problem(const double *values, char *msg, size_t n) {
                  0.5 * values[VR_CLEAT_WIDTH], values[VR_CLEAT_BEVEL]);
         return 1;
     }
+    if (values[VR_RING_ENVELOPE] != 0.0 && values[VR_FOOTPRINT_LENGTH] > 0.0 && values[VR_CLEAT_HEIGHT] != 0.0
+        && !(values[VR_STATIC_LOAD] > 0.0)) {
+        snprintf(msg, n, "static_load must be > 0 N when ring_envelope (the ring's radius follows from the static "
+                         "deflection)");
+        return 1;
+    }
     if (values[VR_STIFFNESS_EXPONENT] != 1.0 && !(values[VR_STATIC_LOAD] > 0.0)) {
         snprintf(msg, n, "static_load must be > 0 N when stiffness_exponent != 1");
         return 1;
@@ -186,6 +192,7 @@ int cleatfmu_evaluate(double *v, double time, const void *data, char *msg, size_
     p.lug_phase = v[VR_LUG_PHASE];
     p.parabolic_pressure = v[VR_PARABOLIC_PRESSURE] != 0.0;
     p.cleat_bevel = v[VR_CLEAT_BEVEL];
+    p.ring_envelope = v[VR_RING_ENVELOPE] != 0.0;
     cleatfmu_extended_tire(v[VR_HUB_Z], v[VR_HUB_VZ], v[VR_HUB_X], v[VR_HUB_VX], v[VR_ROAD_Z], v[VR_ROAD_VZ],
                            &p, &r);
     v[VR_ROAD_EFFECTIVE_Z] = r.road;

@@ -198,8 +198,11 @@ class TractorProblem:
 class TractorFitModel:
     """The baseline corners plus a set of effects over all channels, with its parameter vector."""
 
-    def __init__(self, effects, problem: TractorProblem, *, resolve_edges: bool = False):
+    def __init__(self, effects, problem: TractorProblem, *, resolve_edges: bool = False, ring: bool = False):
         self.effects = frozenset(effects)
+        #: with ``enveloping``: the footprint's cleat seen through a rigid ring over an elastic bed (the tire
+        #: law's ``ring_envelope``) instead of a parabolic contact pressure
+        self.ring = bool(ring) and "enveloping" in self.effects
         self.resolve_edges = resolve_edges
         unknown = self.effects - set(EFFECTS)
         if unknown:
@@ -254,7 +257,7 @@ class TractorFitModel:
             self.problem.rec, tire, self.effects, k=theta[f"k_{tire}"], c=theta[f"c_{tire}"],
             footprint=theta.get(f"footprint_{axle}"), exponent=theta.get("exponent"), friction=theta.get("friction"),
             lug=(theta[f"lug_amplitude_{tire}"], theta[f"lug_frequency_{axle}"], theta[f"lug_phase_{tire}"])
-            if "periodic_disturbance" in self.effects else None)
+            if "periodic_disturbance" in self.effects else None, ring=self.ring)
 
     def body(self, theta: dict) -> Body:
         pb, rec = self.problem, self.problem.rec
@@ -352,17 +355,19 @@ class TractorFitModel:
 
 
 def tire_law_parameters(rec: Recording, tire: str, effects, *, k: float, c: float, footprint=None, exponent=None,
-                        friction=None, lug=None) -> dict:
-    """The extended tire-law parameters of one tire of a fitting model .
+                        friction=None, lug=None, ring: bool = False) -> dict:
+    """The extended tire-law parameters of one tire of a fitting model.
 
     `lug` is (amplitude m, frequency Hz, phase rad); every tire-side effect in
-    `effects` takes its parameter from the keyword of the same meaning.
+    `effects` takes its parameter from the keyword of the same meaning; with `ring` an enveloping
+    tire sees the cleat through the rigid ring (``ring_envelope``).
     """
     p = dict(tire_law.EXTENDED_DEFAULTS)
     p.update(stiffness=k, damping=c, unloaded_radius=_UNLOADED_RADIUS_M, static_load=rec.wheel_load_N[tire],
              unilateral="lift_off" in effects)
     if "enveloping" in effects:
-        p.update(footprint_length=footprint, parabolic_pressure=True, cleat_x=0.0, cleat_height=rec.cleat_height_m,
+        p.update(footprint_length=footprint, parabolic_pressure=True, ring_envelope=ring, cleat_x=0.0,
+                 cleat_height=rec.cleat_height_m,
                  cleat_width=rec.cleat_width_m,
                  cleat_bevel=0.0 if rec.cleat_profile is None else rec.cleat_profile.builtin_bevel_m)
     if "nonlinear_stiffness" in effects:

@@ -37,7 +37,11 @@ try:   # pragma: no cover - numba is a dependency; the fallback keeps the packag
     _bevel = _compiled(tire_law.bevel_cleat, {})
     _footprint = _compiled(tire_law.footprint_cleat, {"bevel_cleat": _bevel})
     _lug = _compiled(tire_law.lug_road, {}, "always")
-    _force = _compiled(tire_law.tire_force, {"footprint_cleat": _footprint, "lug_road": _lug}, "always")
+    _arc = _compiled(tire_law.arc_area, {})
+    _ring = _compiled(tire_law.ring_cleat, {"arc_area": _arc})
+    _sink = _compiled(tire_law.static_deflection, {}, "always")
+    _force = _compiled(tire_law.tire_force, {"footprint_cleat": _footprint, "lug_road": _lug, "ring_cleat": _ring,
+                                             "static_deflection": _sink}, "always")
 except ImportError:   # pragma: no cover
     numba = None
 

@@ -39,6 +39,17 @@ reduces it to the point-contact law above):
   ṙ = dr/dx · ẋ.  A parabolic footprint of length ℓ spreads the cleat like a
   uniform one of length ≈ 0.77 ℓ (same second moment), but with no kink where
   the footprint's ends pass the cleat's edges;
+* **rigid-ring envelope** (``ring_envelope``, with a footprint): the tire as a rigid
+  ring of radius R over an elastic bed whose pressure is ∝ sqrt(δ(ξ)), δ(ξ) = δ + z(x + ξ) − ξ²/2R
+  the bed's compression at ξ from the hub (small angles): on flat ground its contact is 2 sqrt(2Rδ)
+  long, its pressure elliptic and its force linear in δ, so k keeps its meaning; R = ℓ² / (8 δ_W)
+  makes ℓ the footprint at the static load (δ_W = n W / k).  The cleat is felt as the equivalent
+  height r = [S(δ + H) − S(δ)] / (πR), S(a) = ∫ over the cleat of sqrt(2Ra − ξ²) dξ in closed form
+  (:func:`ring_cleat`): H once the cleat holds the whole contact, 0 out of reach; contact starts
+  sqrt(2R(δ + H)) ahead of the hub, further than ℓ/2 for a high cleat, and a low cleat is weighed
+  towards the contact's ends (an arcsine weight) rather than its centre.  δ is the hub's deflection
+  over the road and the lugs; ṙ = ∂r/∂x · ẋ (at that deflection).  A bevelled cleat is taken as the
+  rectangle of the same height and area;
 * **lugs** (``periodic_disturbance``): road-equivalent lug passing
   A sin(2π x / p + φ);
 * **progressive stiffness** (``nonlinear_stiffness``): elastic force
@@ -57,7 +68,7 @@ import math
 __all__ = [
     "CONTACT_MODES", "deflection_m", "deflection_rate_m_s", "force_n", "in_contact",
     "point_contact", "parameter_problem", "value_problem",
-    "EXTENDED_DEFAULTS", "footprint_cleat", "bevel_cleat", "lug_road", "elastic_force", "extended_tire",
+    "EXTENDED_DEFAULTS", "footprint_cleat", "bevel_cleat", "ring_cleat", "arc_area", "static_deflection", "lug_road", "elastic_force", "extended_tire",
     "extended_parameter_problem", "extended_force_fn", "LAW_FIELDS", "law_vector", "tire_force",
 ]
 
@@ -220,6 +231,7 @@ EXTENDED_DEFAULTS = {
     "cleat_height": 0.0,            # H, m (0: no built-in cleat)
     "cleat_width": 0.1,             # w, m
     "cleat_bevel": 0.0,             # b, m (0: vertical edges; else a trapezoid, b <= w / 2)
+    "ring_envelope": False,         # the footprint's cleat seen through a rigid ring over an elastic bed
     "unilateral": False,            # contact can only push
     "stiffness_exponent": 1.0,      # n
     "static_load": 0.0,             # W, N (needed when n != 1)
@@ -302,6 +314,41 @@ def bevel_cleat(x, footprint, xc, h, w, parabolic, bevel):
     return height, slope
 
 
+def arc_area(u, s):
+    """∫ sqrt(s² − ξ²) dξ from ξ = −s to clip(u, −s, s), m² (0 for s ≤ 0): area under a half circle."""
+    if s <= 0.0:
+        return 0.0
+    v = min(s, max(-s, u))
+    return 0.5 * (v * math.sqrt(s * s - v * v) + s * s * math.asin(v / s)) + 0.25 * math.pi * s * s
+
+
+def ring_cleat(hub_x_m, deflection_m, footprint_m, cleat_x_m, cleat_height_m, cleat_width_m, static_deflection_m,
+               bevel_m=0.0):
+    """Built-in cleat seen through a rigid ring over an elastic bed: equivalent height (m) and slope dr/dx (-).
+
+    The ring's radius R = ℓ² / (8 δ_W) makes ℓ (`footprint_m`) its flat contact at the static deflection
+    δ_W (`static_deflection_m`); `deflection_m` δ is the hub's deflection over the road without the cleat.
+    r = [A(u₁, s_H) − A(u₀, s_H) − A(u₁, s₀) + A(u₀, s₀)] / (πR), A = :func:`arc_area`, u₀, u₁ the cleat's
+    edges from the hub, s_H = sqrt(2R(δ + H)), s₀ = sqrt(2Rδ) (0 when δ ≤ 0).  A bevel b makes the cleat
+    the rectangle of the same height and area (width w − b, from x_c + b/2).
+    """
+    radius = footprint_m * footprint_m / (8.0 * static_deflection_m)
+    u0 = cleat_x_m + 0.5 * bevel_m - hub_x_m
+    u1 = u0 + cleat_width_m - bevel_m
+    sh = math.sqrt(2.0 * radius * max(deflection_m + cleat_height_m, 0.0))
+    s0 = math.sqrt(2.0 * radius * max(deflection_m, 0.0))
+    scale = 1.0 / (math.pi * radius)
+    height = (arc_area(u1, sh) - arc_area(u0, sh) - arc_area(u1, s0) + arc_area(u0, s0)) * scale
+    slope = (math.sqrt(max(0.0, sh * sh - u0 * u0)) - math.sqrt(max(0.0, sh * sh - u1 * u1))
+             - math.sqrt(max(0.0, s0 * s0 - u0 * u0)) + math.sqrt(max(0.0, s0 * s0 - u1 * u1))) * scale
+    return height, slope
+
+
+def static_deflection(stiffness_n_m, exponent, static_load_n):
+    """Deflection at the static load, m: n W / k (W / k for a linear tire)."""
+    return exponent * static_load_n / stiffness_n_m
+
+
 def lug_road(hub_x_m, amplitude_m, pitch_m, phase_rad):
     """Road-equivalent lug passing A sin(2π x / p + φ): height (m) and slope dr/dx (-)."""
     if amplitude_m == 0.0:
@@ -344,9 +391,15 @@ def extended_tire(hub_z_m, hub_vz_m_s, hub_x_m, hub_vx_m_s, road_z_m, road_vz_m_
     road_total : float
         Effective road height under the tire, m.
     """
-    cleat, cleat_slope = footprint_cleat(hub_x_m, p["footprint_length"], p["cleat_x"], p["cleat_height"],
-                                         p["cleat_width"], p["parabolic_pressure"], p["cleat_bevel"])
     lug, lug_slope = lug_road(hub_x_m, p["lug_amplitude"], p["lug_pitch"], p["lug_phase"])
+    if p["ring_envelope"] and p["footprint_length"] > 0.0 and p["cleat_height"] != 0.0:
+        cleat, cleat_slope = ring_cleat(hub_x_m, p["unloaded_radius"] - (hub_z_m - (road_z_m + lug)),
+                                        p["footprint_length"], p["cleat_x"], p["cleat_height"], p["cleat_width"],
+                                        static_deflection(p["stiffness"], p["stiffness_exponent"],
+                                                          p["static_load"]), p["cleat_bevel"])
+    else:
+        cleat, cleat_slope = footprint_cleat(hub_x_m, p["footprint_length"], p["cleat_x"], p["cleat_height"],
+                                             p["cleat_width"], p["parabolic_pressure"], p["cleat_bevel"])
     road = road_z_m + cleat + lug
     d = p["unloaded_radius"] - (hub_z_m - road)
     dd = road_vz_m_s + (cleat_slope + lug_slope) * hub_vx_m_s - hub_vz_m_s
@@ -382,9 +435,11 @@ def extended_parameter_problem(p):
             return problem
     if p["cleat_bevel"] > 0.5 * p["cleat_width"]:
         return f"cleat_bevel must be <= cleat_width / 2 ({0.5 * p['cleat_width']!r} m), got {p['cleat_bevel']!r} m"
+    if p["ring_envelope"] and p["footprint_length"] > 0.0 and p["cleat_height"] != 0.0 and not p["static_load"] > 0:
+        return "static_load must be > 0 N when ring_envelope (the ring's radius follows from the static deflection)"
     if p["stiffness_exponent"] != 1.0 and not p["static_load"] > 0:
         return "static_load must be > 0 N when stiffness_exponent != 1"
-    for name in ("unilateral", "parabolic_pressure"):
+    for name in ("unilateral", "parabolic_pressure", "ring_envelope"):
         if not isinstance(p[name], bool):
             return f"{name} must be a Boolean, got {p[name]!r}"
     return None
@@ -406,19 +461,23 @@ def extended_force_fn(p):
     la, lp, lph = p["lug_amplitude"], p["lug_pitch"], p["lug_phase"]
     unilateral = bool(p["unilateral"])
     use_cleat = hc != 0.0
+    ring = bool(p["ring_envelope"]) and fp > 0.0 and use_cleat
+    sink = static_deflection(k, n, w_load) if ring else 0.0
     use_lug = la != 0.0
     linear = n == 1.0
     tanh = math.tanh
 
     def force(hub_z, hub_vz, hub_x, hub_vx, road_z, road_vz):
-        if use_cleat:
-            cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc, parabolic, bevel)
-        else:
-            cleat, cleat_slope = 0.0, 0.0
         if use_lug:
             lug, lug_slope = lug_road(hub_x, la, lp, lph)
         else:
             lug, lug_slope = 0.0, 0.0
+        if ring:
+            cleat, cleat_slope = ring_cleat(hub_x, r0 - (hub_z - (road_z + lug)), fp, xc, hc, wc, sink, bevel)
+        elif use_cleat:
+            cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc, parabolic, bevel)
+        else:
+            cleat, cleat_slope = 0.0, 0.0
         road = road_z + cleat + lug
         d = r0 - (hub_z - road)
         dd = road_vz + (cleat_slope + lug_slope) * hub_vx - hub_vz
@@ -437,7 +496,8 @@ def extended_force_fn(p):
 #: Order of the extended tire's parameters in the flat vector of :func:`tire_force`.
 LAW_FIELDS = ("stiffness", "damping", "unloaded_radius", "footprint_length", "cleat_x", "cleat_height",
               "cleat_width", "unilateral", "stiffness_exponent", "static_load", "friction_force",
-              "friction_velocity", "lug_amplitude", "lug_pitch", "lug_phase", "parabolic_pressure", "cleat_bevel")
+              "friction_velocity", "lug_amplitude", "lug_pitch", "lug_phase", "parabolic_pressure", "cleat_bevel",
+              "ring_envelope")
 
 
 def law_vector(p) -> list:
@@ -458,12 +518,16 @@ def tire_force(hub_z, hub_vz, hub_x, hub_vx, road_z, road_vz, q):
     fp, xc, hc, wc = q[3], q[4], q[5], q[6]
     n, w_load, fc, vf = q[8], q[9], q[10], q[11]
     la, lp, lph = q[12], q[13], q[14]
-    cleat, cleat_slope = 0.0, 0.0
-    if hc != 0.0:
-        cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc, q[15] != 0.0, q[16])
     lug, lug_slope = 0.0, 0.0
     if la != 0.0:
         lug, lug_slope = lug_road(hub_x, la, lp, lph)
+    cleat, cleat_slope = 0.0, 0.0
+    if hc != 0.0:
+        if q[17] != 0.0 and fp > 0.0:
+            cleat, cleat_slope = ring_cleat(hub_x, r0 - (hub_z - (road_z + lug)), fp, xc, hc, wc,
+                                            static_deflection(k, n, w_load), q[16])
+        else:
+            cleat, cleat_slope = footprint_cleat(hub_x, fp, xc, hc, wc, q[15] != 0.0, q[16])
     road = road_z + cleat + lug
     d = r0 - (hub_z - road)
     dd = road_vz + (cleat_slope + lug_slope) * hub_vx - hub_vz

@@ -367,10 +367,15 @@ class TractorModel:
         """Hub heights where every tire carries its static load at rest (closed form of the law), m."""
         out = []
         for p, x0 in zip(self.laws, hub_x0):
-            cleat, _ = tire_law.footprint_cleat(x0, p["footprint_length"], p["cleat_x"], p["cleat_height"],
-                                                p["cleat_width"], p["parabolic_pressure"], p["cleat_bevel"])
             lug, _ = tire_law.lug_road(x0, p["lug_amplitude"], p["lug_pitch"], p["lug_phase"])
-            deflection = p["stiffness_exponent"] * p["static_load"] / p["stiffness"]
+            deflection = tire_law.static_deflection(p["stiffness"], p["stiffness_exponent"], p["static_load"])
+            if p["ring_envelope"] and p["footprint_length"] > 0.0 and p["cleat_height"] != 0.0:
+                # exact with the cleat out of the ring's reach, as it is where a run starts
+                cleat, _ = tire_law.ring_cleat(x0, deflection, p["footprint_length"], p["cleat_x"], p["cleat_height"],
+                                               p["cleat_width"], deflection, p["cleat_bevel"])
+            else:
+                cleat, _ = tire_law.footprint_cleat(x0, p["footprint_length"], p["cleat_x"], p["cleat_height"],
+                                                    p["cleat_width"], p["parabolic_pressure"], p["cleat_bevel"])
             out.append(p["unloaded_radius"] + cleat + lug - deflection)
         return np.array(out)
 

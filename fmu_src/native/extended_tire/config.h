@@ -1,5 +1,5 @@
 /* FMU kind extended_tire: point contact plus enveloped built-in cleat (rectangular or bevelled;
- * uniform or parabolic footprint pressure), lugs, progressive stiffness, friction and unilateral contact.
+ * uniform or parabolic footprint pressure, or a rigid ring over an elastic bed), lugs, progressive stiffness, friction and unilateral contact.
  * The variable table must match VARIABLES of fmu_src/extended_tire (checked by the build);
  * new variables are appended, so that the value references of the others never change. */
 #ifndef CLEATFMU_CONFIG_H
@@ -8,7 +8,7 @@
 #define MODEL_IDENTIFIER CleatfmuExtendedTire
 #define MODEL_KIND "extended_tire"
 #define MODEL_EXTENDED 1
-#define N_VARIABLES 28
+#define N_VARIABLES 29
 
 enum {
     VR_HUB_Z, VR_HUB_VZ, VR_ROAD_Z, VR_ROAD_VZ, VR_HUB_X, VR_HUB_VX,
@@ -16,7 +16,7 @@ enum {
     VR_CLEAT_WIDTH, VR_UNILATERAL, VR_STIFFNESS_EXPONENT, VR_STATIC_LOAD, VR_FRICTION_FORCE,
     VR_FRICTION_VELOCITY, VR_LUG_AMPLITUDE, VR_LUG_PITCH, VR_LUG_PHASE,
     VR_FORCE_Z, VR_DEFLECTION, VR_DEFLECTION_RATE, VR_IN_CONTACT, VR_ROAD_EFFECTIVE_Z,
-    VR_PARABOLIC_PRESSURE, VR_CLEAT_BEVEL
+    VR_PARABOLIC_PRESSURE, VR_CLEAT_BEVEL, VR_RING_ENVELOPE
 };
 
 #define MODEL_VARIABLES \
@@ -47,6 +47,7 @@ enum {
     {"in_contact", VT_BOOLEAN, VC_OUTPUT, RULE_NONE, ""}, \
     {"road_effective_z", VT_REAL, VC_OUTPUT, RULE_NONE, "m"}, \
     {"parabolic_pressure", VT_BOOLEAN, VC_PARAMETER, RULE_BOOLEAN, ""}, \
-    {"cleat_bevel", VT_REAL, VC_PARAMETER, RULE_NONNEGATIVE, "m"}
+    {"cleat_bevel", VT_REAL, VC_PARAMETER, RULE_NONNEGATIVE, "m"}, \
+    {"ring_envelope", VT_BOOLEAN, VC_PARAMETER, RULE_BOOLEAN, ""}
 
 #endif
