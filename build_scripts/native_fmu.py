@@ -40,7 +40,8 @@ def equilibrium_starts(kind: FmuKind, starts: dict, given: dict, static_load_n: 
     touches the built-in cleat is moved 1 m before it, so that the default
     experiment does not park the tire on the cleat.
     """
-    from identification.model.tire_law import footprint_cleat, lug_road, ring_cleat, static_deflection
+    from identification.model.tire_law import (footprint_cleat, lug_road, ring_cleat, ring_envelope_on,
+                                               static_deflection)
 
     out = dict(starts)
     load = static_load_n
@@ -50,8 +51,7 @@ def equilibrium_starts(kind: FmuKind, starts: dict, given: dict, static_load_n: 
     deflection = (n if n != 1.0 else 1.0) * load / starts["stiffness"]
     road = starts.get("road_z", 0.0)
     if "hub_x" in starts:
-        ring = bool(starts.get("ring_envelope", False) and starts.get("footprint_length", 0.0) > 0.0
-                    and starts.get("cleat_height", 0.0) and starts.get("static_load", 0.0) > 0.0)
+        ring = ring_envelope_on(starts) and starts["static_load"] > 0.0
         sink = static_deflection(starts["stiffness"], n, starts["static_load"]) if ring else 0.0
         if starts.get("cleat_height", 0.0) and "hub_x" not in given:
             reach = starts["cleat_x"] - 0.5 * starts["footprint_length"]

@@ -68,7 +68,8 @@ import math
 __all__ = [
     "CONTACT_MODES", "deflection_m", "deflection_rate_m_s", "force_n", "in_contact",
     "point_contact", "parameter_problem", "value_problem",
-    "EXTENDED_DEFAULTS", "footprint_cleat", "bevel_cleat", "ring_cleat", "arc_area", "static_deflection", "lug_road", "elastic_force", "extended_tire",
+    "EXTENDED_DEFAULTS", "footprint_cleat", "bevel_cleat", "ring_cleat", "arc_area", "ring_envelope_on",
+    "static_deflection", "lug_road", "elastic_force", "extended_tire",
     "extended_parameter_problem", "extended_force_fn", "LAW_FIELDS", "law_vector", "tire_force",
 ]
 
@@ -344,6 +345,12 @@ def ring_cleat(hub_x_m, deflection_m, footprint_m, cleat_x_m, cleat_height_m, cl
     return height, slope
 
 
+def ring_envelope_on(p) -> bool:
+    """Whether parameters `p` (named as in :data:`EXTENDED_DEFAULTS`) see their built-in cleat through the
+    rigid ring: ``ring_envelope`` with a footprint and a cleat (else the ring has nothing to envelope)."""
+    return bool(p["ring_envelope"]) and p["footprint_length"] > 0.0 and p["cleat_height"] != 0.0
+
+
 def static_deflection(stiffness_n_m, exponent, static_load_n):
     """Deflection at the static load, m: n W / k (W / k for a linear tire)."""
     return exponent * static_load_n / stiffness_n_m
@@ -392,7 +399,7 @@ def extended_tire(hub_z_m, hub_vz_m_s, hub_x_m, hub_vx_m_s, road_z_m, road_vz_m_
         Effective road height under the tire, m.
     """
     lug, lug_slope = lug_road(hub_x_m, p["lug_amplitude"], p["lug_pitch"], p["lug_phase"])
-    if p["ring_envelope"] and p["footprint_length"] > 0.0 and p["cleat_height"] != 0.0:
+    if ring_envelope_on(p):
         cleat, cleat_slope = ring_cleat(hub_x_m, p["unloaded_radius"] - (hub_z_m - (road_z_m + lug)),
                                         p["footprint_length"], p["cleat_x"], p["cleat_height"], p["cleat_width"],
                                         static_deflection(p["stiffness"], p["stiffness_exponent"],
@@ -435,7 +442,7 @@ def extended_parameter_problem(p):
             return problem
     if p["cleat_bevel"] > 0.5 * p["cleat_width"]:
         return f"cleat_bevel must be <= cleat_width / 2 ({0.5 * p['cleat_width']!r} m), got {p['cleat_bevel']!r} m"
-    if p["ring_envelope"] and p["footprint_length"] > 0.0 and p["cleat_height"] != 0.0 and not p["static_load"] > 0:
+    if ring_envelope_on(p) and not p["static_load"] > 0:
         return "static_load must be > 0 N when ring_envelope (the ring's radius follows from the static deflection)"
     if p["stiffness_exponent"] != 1.0 and not p["static_load"] > 0:
         return "static_load must be > 0 N when stiffness_exponent != 1"
@@ -461,7 +468,7 @@ def extended_force_fn(p):
     la, lp, lph = p["lug_amplitude"], p["lug_pitch"], p["lug_phase"]
     unilateral = bool(p["unilateral"])
     use_cleat = hc != 0.0
-    ring = bool(p["ring_envelope"]) and fp > 0.0 and use_cleat
+    ring = ring_envelope_on(p)
     sink = static_deflection(k, n, w_load) if ring else 0.0
     use_lug = la != 0.0
     linear = n == 1.0

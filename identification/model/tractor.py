@@ -369,7 +369,7 @@ class TractorModel:
         for p, x0 in zip(self.laws, hub_x0):
             lug, _ = tire_law.lug_road(x0, p["lug_amplitude"], p["lug_pitch"], p["lug_phase"])
             deflection = tire_law.static_deflection(p["stiffness"], p["stiffness_exponent"], p["static_load"])
-            if p["ring_envelope"] and p["footprint_length"] > 0.0 and p["cleat_height"] != 0.0:
+            if tire_law.ring_envelope_on(p):
                 # exact with the cleat out of the ring's reach, as it is where a run starts
                 cleat, _ = tire_law.ring_cleat(x0, deflection, p["footprint_length"], p["cleat_x"], p["cleat_height"],
                                                p["cleat_width"], deflection, p["cleat_bevel"])
