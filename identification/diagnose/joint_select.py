@@ -7,7 +7,8 @@ independent samples per channel) improves by ≥ 10, it removes ≥ 25 % of the
 noise-weighted residual energy (or, for an effect that acts on a narrow part
 of the data, ≥ 75 % of the residual there - a steady line, the free decays'
 second harmonic:
-:func:`~identification.diagnose.joint_evidence.local_gain`), its parameters lie
+:func:`~identification.diagnose.joint_evidence.local_gain`; an effect that adds no
+parameter, unilateral contact, needs no share: its gate and the BIC name it), its parameters lie
 within their physical bounds and it passes its physical gate
 (:mod:`~identification.diagnose.joint_evidence`).  The best qualifier is named;
 the selection stops when none qualifies.  Candidates are screened at a 2 ms
@@ -133,7 +134,10 @@ def _judge(cand, current_sse, current_p, n, n_eff):
     sse = fit.weighted_sse()
     gain = 1.0 - sse / current_sse
     dbic = _bic(current_sse, n, n_eff, current_p) - _bic(sse, n, n_eff, len(fit.model.names))
-    enough = gain >= MIN_GAIN or (cand.local_gain is not None and cand.local_gain >= MIN_LOCAL_GAIN)
+    # the 25 % rule guards against parameters that fit noise; an effect that adds none (unilateral contact)
+    # is named on its physical gate and the BIC alone
+    enough = (gain >= MIN_GAIN or (cand.local_gain is not None and cand.local_gain >= MIN_LOCAL_GAIN)
+              or len(fit.model.names) <= current_p)
     qualified = bool(cand.passed_gate and fit.in_bounds and dbic >= MIN_DELTA_BIC and enough)
     return TractorCandidate(cand.effect, fit, float(dbic), float(gain), cand.passed_gate, qualified, cand.evidence,
                             cand.local_gain)
