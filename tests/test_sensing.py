@@ -108,3 +108,28 @@ def test_the_cutoff_is_checked():
     traj = _synthetic_trajectory(1.0 / 1024, 500)
     with pytest.raises(InputError, match="Nyquist"):
         sensed_lowpassed(traj, traj.time_s, 1024.0, None, cutoff_hz=600.0)
+
+
+@pytest.mark.parametrize("rows", [1, 3, 4, 5, 9])
+@pytest.mark.parametrize("order", [1, 2, 5, 8])
+def test_the_rows_filter_is_scipys_sosfiltfilt_through_long_zero_stretches(rows, order):
+    # a prediction is exactly zero before its impact: the backward pass's states decay through that stretch
+    # (into subnormal numbers, where the compiled filter sets them to zero) and must still give scipy's result
+    from scipy import signal
+
+    from identification.model.sensing import _filtfilt_rows
+    from identification.recording.preprocess import lowpass_design
+
+    fs, n = 2000.0, 20000
+    sos, zi, edge = lowpass_design(sample_rate_hz=fs, cutoff_hz=100.0, order=order)
+    t = np.arange(n) / fs
+    x = np.zeros((rows, n))
+    for r in range(rows):
+        onset = 7.0 + 0.2 * r
+        after = t >= onset
+        x[r, after] = (r + 1) * np.exp(-3.0 * (t[after] - onset)) * np.sin(2 * np.pi * (4 + r) * (t[after] - onset))
+    fast = _filtfilt_rows(x, sos, zi, edge)
+    for r in range(rows):
+        ref = signal.sosfiltfilt(sos, x[r])
+        assert np.max(np.abs(fast[r] - ref)) <= TOL * np.max(np.abs(ref))
+        assert np.any(np.abs(ref[ref != 0]) < 2.3e-308)   # the stretch does reach subnormal numbers

@@ -218,3 +218,22 @@ def test_matrices_are_fresh_copies():
     assert np.all(mass2 > 0) and np.any(J2 != 0)
     listed = Body(list(TIRES), list(LOADS), L, pitch=True, roll=True, pitch_index=0.8)   # unhashable: not cached
     np.testing.assert_array_equal(listed.matrices()[0], J2)
+
+
+@pytest.mark.parametrize("J", [np.eye(4), np.ones((4, 3)), np.array([[1.0, 0, 0], [0, 0, 0], [0, 2.0, 3.0], [0, 0, 4.0]]),
+                               np.array([[0.0, 1.0, 0.0, 5.0], [0.0, 0.0, 0.0, 0.0]])])
+def test_the_compiled_stepping_sums_over_every_non_zero_of_J(J):
+    from identification.model.kernels import sparsity
+
+    r0, r1, c0, c1 = sparsity(J)
+    for t in range(J.shape[0]):
+        inside = np.zeros(J.shape[1], dtype=bool)
+        inside[r0[t]:r1[t]] = True
+        assert not np.any(J[t, ~inside])
+        assert r1[t] - r0[t] <= J.shape[1] and (r1[t] == r0[t]) == (not np.any(J[t]))
+    for j in range(J.shape[1]):
+        inside = np.zeros(J.shape[0], dtype=bool)
+        inside[c0[j]:c1[j]] = True
+        assert not np.any(J[~inside, j])
+        assert (c1[j] == c0[j]) == (not np.any(J[:, j]))
+    assert list(zip(r0, r1))[:1] == [(int(np.flatnonzero(J[0])[0]), int(np.flatnonzero(J[0])[-1]) + 1)]

@@ -121,6 +121,9 @@ def _try(job):
                    _waveform_start(model, start, start0, _flying_timing(model, start, start0))]
     else:
         options = [start]
+    # options that coincide (a current model whose tires are the waveform fits' and whose timing is the
+    # search's) are fitted once: a fit is a deterministic function of its start
+    options = list({tuple(sorted(o.items())): o for o in options}.values())
     fits = [fit_tractor(model, s, step_s=SCREEN_STEP_S, budget=SCREEN_BUDGET) for s in options]
     fit = min(fits, key=lambda f: (not f.in_bounds, f.weighted_sse()))
     checks = [check_tractor(effect, fit, current) for effect in new]

@@ -357,40 +357,80 @@ def _filtfilt_rows(x, sos, zi, edge):
     Odd extension by `edge` samples at both ends, steady-state initial
     conditions `zi` (``sosfilt_zi``) scaled by the first value of each pass,
     and scipy's ``sosfilt`` recursion (transposed direct form II per section).
+    The rows go four at a time (the last group padded with a copy of its first
+    row), section after section over the whole extended signal, their states in
+    scalars: four independent recursions in flight, with the same operations in
+    the same order per row as ``sosfilt``.  Every :data:`FLUSH_EVERY` samples a
+    section's states below :data:`FLUSH_BELOW` in sum are set to zero: a
+    model's prediction is exactly zero before its impact, and the backward
+    pass's states decay through that stretch into subnormal numbers, whose
+    arithmetic is some hundred times slower (measured: the filter 3.7x faster
+    on a 2 kHz recording); what that changes stays under 1e-200 m/s².
     """
     ch, n = x.shape
     m = n + 2 * edge
     ns = sos.shape[0]
-    ext = np.empty((m, ch))
-    for c in range(ch):
-        for k in range(edge):
-            ext[k, c] = 2 * x[c, 0] - x[c, edge - k]
-            ext[edge + n + k, c] = 2 * x[c, n - 1] - x[c, n - 2 - k]
-        for k in range(n):
-            ext[edge + k, c] = x[c, k]
-    z0 = np.empty((ns, ch))
-    z1 = np.empty((ns, ch))
-    for backward in range(2):
-        for s in range(ns):
-            for c in range(ch):
-                x0 = ext[m - 1, c] if backward else ext[0, c]
-                z0[s, c] = zi[s, 0] * x0
-                z1[s, c] = zi[s, 1] * x0
-        for k in range(m):
-            i = m - 1 - k if backward else k
+    out = np.empty((ch, n))
+    ext = np.empty((m, 4))
+    for c0 in range(0, ch, 4):
+        w = min(4, ch - c0)
+        for j in range(4):
+            c = c0 + j if j < w else c0
+            for k in range(edge):
+                ext[k, j] = 2 * x[c, 0] - x[c, edge - k]
+                ext[edge + n + k, j] = 2 * x[c, n - 1] - x[c, n - 2 - k]
+            for k in range(n):
+                ext[edge + k, j] = x[c, k]
+        for backward in range(2):
+            first = m - 1 if backward else 0
+            xa, xb, xc, xd = ext[first, 0], ext[first, 1], ext[first, 2], ext[first, 3]
             for s in range(ns):
                 b0, b1, b2, a1, a2 = sos[s, 0], sos[s, 1], sos[s, 2], sos[s, 4], sos[s, 5]
-                for c in range(ch):
-                    xn = ext[i, c]
-                    yn = b0 * xn + z0[s, c]
-                    z0[s, c] = b1 * xn - a1 * yn + z1[s, c]
-                    z1[s, c] = b2 * xn - a2 * yn
-                    ext[i, c] = yn
-    out = np.empty((ch, n))
-    for c in range(ch):
-        for k in range(n):
-            out[c, k] = ext[edge + k, c]
+                za0, za1 = zi[s, 0] * xa, zi[s, 1] * xa
+                zb0, zb1 = zi[s, 0] * xb, zi[s, 1] * xb
+                zc0, zc1 = zi[s, 0] * xc, zi[s, 1] * xc
+                zd0, zd1 = zi[s, 0] * xd, zi[s, 1] * xd
+                for k in range(m):
+                    if k % FLUSH_EVERY == 0:
+                        if abs(za0) + abs(za1) < FLUSH_BELOW:
+                            za0 = za1 = 0.0
+                        if abs(zb0) + abs(zb1) < FLUSH_BELOW:
+                            zb0 = zb1 = 0.0
+                        if abs(zc0) + abs(zc1) < FLUSH_BELOW:
+                            zc0 = zc1 = 0.0
+                        if abs(zd0) + abs(zd1) < FLUSH_BELOW:
+                            zd0 = zd1 = 0.0
+                    i = m - 1 - k if backward else k
+                    xn = ext[i, 0]
+                    yn = b0 * xn + za0
+                    za0 = b1 * xn - a1 * yn + za1
+                    za1 = b2 * xn - a2 * yn
+                    ext[i, 0] = yn
+                    xn = ext[i, 1]
+                    yn = b0 * xn + zb0
+                    zb0 = b1 * xn - a1 * yn + zb1
+                    zb1 = b2 * xn - a2 * yn
+                    ext[i, 1] = yn
+                    xn = ext[i, 2]
+                    yn = b0 * xn + zc0
+                    zc0 = b1 * xn - a1 * yn + zc1
+                    zc1 = b2 * xn - a2 * yn
+                    ext[i, 2] = yn
+                    xn = ext[i, 3]
+                    yn = b0 * xn + zd0
+                    zd0 = b1 * xn - a1 * yn + zd1
+                    zd1 = b2 * xn - a2 * yn
+                    ext[i, 3] = yn
+        for j in range(w):
+            for k in range(n):
+                out[c0 + j, k] = ext[edge + k, j]
     return out
+
+
+#: How often (samples) :func:`_filtfilt_rows` looks for states to set to zero, and below what sum of their
+#: magnitudes it does.
+FLUSH_EVERY = 32
+FLUSH_BELOW = 1e-200
 
 
 _hold = getattr(acquisition.hold, "py_func", acquisition.hold)     # the plain function, compiled here

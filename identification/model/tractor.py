@@ -366,7 +366,8 @@ class TractorModel:
     def static_hub_z(self, hub_x0) -> np.ndarray:
         """Hub heights where every tire carries its static load at rest (closed form of the law), m."""
         out = []
-        for p, x0 in zip(self.laws, hub_x0):
+        # Python floats: the law's min and max on numpy scalars took a tenth of a small model's run
+        for p, x0 in zip(self.laws, np.asarray(hub_x0, dtype=float).tolist()):
             lug, _ = tire_law.lug_road(x0, p["lug_amplitude"], p["lug_pitch"], p["lug_phase"])
             deflection = tire_law.static_deflection(p["stiffness"], p["stiffness_exponent"], p["static_load"])
             if tire_law.ring_envelope_on(p):
