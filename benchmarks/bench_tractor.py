@@ -129,8 +129,10 @@ def _table(recordings, now: dict, before: dict | None) -> None:
                 line += f"  ({'/'.join(sorted(skip))}: the joint fit collapsed, the channel's fit reported)"
         print(line)
     line = f"  {'median':<44} {statistics.median(cpus):7.2f}"
-    if before:
-        line += f" {statistics.median(olds):7.2f} {statistics.median(olds) / statistics.median(cpus):5.2f}x"
+    if before:   # the ratio column's median: the median recording's speed-up, not the medians' ratio
+        ratios = [o / c for o, c in zip(olds, cpus)]
+        line += (f" {statistics.median(olds):7.2f} {statistics.median(ratios):5.2f}x  (ratios "
+                 f"{min(ratios):.2f}-{max(ratios):.2f}x, the median of the recordings' ratios)")
     print(line)
     print(f"  {'worst':<44} {max(cpus):7.2f}" + (f" {max(olds):7.2f}" if before else ""))
 
