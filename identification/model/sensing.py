@@ -392,39 +392,32 @@ def _filtfilt_rows(x, sos, zi, edge):
                 zd0, zd1 = zi[s, 0] * xd, zi[s, 1] * xd
                 for k in range(m):
                     if k % FLUSH_EVERY == 0:
-                        if abs(za0) + abs(za1) < FLUSH_BELOW:
-                            za0 = za1 = 0.0
-                        if abs(zb0) + abs(zb1) < FLUSH_BELOW:
-                            zb0 = zb1 = 0.0
-                        if abs(zc0) + abs(zc1) < FLUSH_BELOW:
-                            zc0 = zc1 = 0.0
-                        if abs(zd0) + abs(zd1) < FLUSH_BELOW:
-                            zd0 = zd1 = 0.0
+                        za0, za1 = _flushed(za0, za1)
+                        zb0, zb1 = _flushed(zb0, zb1)
+                        zc0, zc1 = _flushed(zc0, zc1)
+                        zd0, zd1 = _flushed(zd0, zd1)
                     i = m - 1 - k if backward else k
-                    xn = ext[i, 0]
-                    yn = b0 * xn + za0
-                    za0 = b1 * xn - a1 * yn + za1
-                    za1 = b2 * xn - a2 * yn
-                    ext[i, 0] = yn
-                    xn = ext[i, 1]
-                    yn = b0 * xn + zb0
-                    zb0 = b1 * xn - a1 * yn + zb1
-                    zb1 = b2 * xn - a2 * yn
-                    ext[i, 1] = yn
-                    xn = ext[i, 2]
-                    yn = b0 * xn + zc0
-                    zc0 = b1 * xn - a1 * yn + zc1
-                    zc1 = b2 * xn - a2 * yn
-                    ext[i, 2] = yn
-                    xn = ext[i, 3]
-                    yn = b0 * xn + zd0
-                    zd0 = b1 * xn - a1 * yn + zd1
-                    zd1 = b2 * xn - a2 * yn
-                    ext[i, 3] = yn
+                    ext[i, 0], za0, za1 = _section(ext[i, 0], za0, za1, b0, b1, b2, a1, a2)
+                    ext[i, 1], zb0, zb1 = _section(ext[i, 1], zb0, zb1, b0, b1, b2, a1, a2)
+                    ext[i, 2], zc0, zc1 = _section(ext[i, 2], zc0, zc1, b0, b1, b2, a1, a2)
+                    ext[i, 3], zd0, zd1 = _section(ext[i, 3], zd0, zd1, b0, b1, b2, a1, a2)
         for j in range(w):
             for k in range(n):
                 out[c0 + j, k] = ext[edge + k, j]
     return out
+
+
+def _section(xn, z0, z1, b0, b1, b2, a1, a2):
+    """One sample through one second-order section (``sosfilt``'s transposed direct form II): (y, z0, z1)."""
+    yn = b0 * xn + z0
+    return yn, b1 * xn - a1 * yn + z1, b2 * xn - a2 * yn
+
+
+def _flushed(z0, z1):
+    """A section's states, zero when their magnitudes sum under :data:`FLUSH_BELOW`."""
+    if abs(z0) + abs(z1) < FLUSH_BELOW:
+        return 0.0, 0.0
+    return z0, z1
 
 
 #: How often (samples) :func:`_filtfilt_rows` looks for states to set to zero, and below what sum of their
@@ -437,6 +430,7 @@ _hold = getattr(acquisition.hold, "py_func", acquisition.hold)     # the plain f
 if numba is not None:
     drop_stale_cache("sensing", "acquisition", acquisition)
     _hold = njit()(_hold)
+    _section, _flushed = njit(inline="always")(_section), njit(inline="always")(_flushed)
     _locate, _interp_at, _guess, _cells, _smooth, _impulse_sums, _count_at_or_before, _grid_velocity, \
         _mean_rows, _chain_rows, _filtfilt_rows = (njit()(f) for f in (
             _locate, _interp_at, _guess, _cells, _smooth, _impulse_sums, _count_at_or_before, _grid_velocity,
