@@ -107,7 +107,15 @@ def analyse(job) -> dict:
         row["error"] = err.splitlines()[-1] if err else f"exit {rc}"
         return row
     row["effects"] = sorted(diag.get("effects", []))
+    speeds = (diag.get("body") or {}).get("speed_m_s") or {}
+    true_m_s = truth["scenario"]["speed_kmh"] / 3.6
+    # the speeds the diagnosis used and fitted, against the true one (the sidecar's is off by up to 1 %)
+    row["speed"] = {key: (speeds[key] / true_m_s - 1 if speeds.get(key) else None)
+                    for key in ("sidecar", "from_onsets", "analysed_with", "from_delay")}
     row["right"] = set(row["effects"]) == set(truth["expected_effects"])
+    # the selections run again from other starts, and whether their result was kept
+    row["again"] = {k: v.get("kept", False) if "skipped" not in v else "skipped"
+                    for k, v in (diag.get("selection_starts") or {}).items()}
     tires = {}
     for w in WHEELS:
         d = diag["tires"].get(w)

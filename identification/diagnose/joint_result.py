@@ -124,6 +124,8 @@ class TractorDiagnosis:
                          "speed_m_s": self.speed_json()},
                 "tires": tires, "evidence": dict(self.evidence),
                 **({"sign_test": self.extra["sign_test"]} if self.extra.get("sign_test") else {}),
+                **({"selection_starts": starts} if (starts := {k: self.extra[k] for k in ("rescue", "scaled_start")
+                                                               if self.extra.get(k)}) else {}),
                 "acquisition": rec.acquisition.to_json() if rec.acquisition is not None else None,
                 "intervals": "conditional on the model: it leaves a residual above the noise floor"
                              if self.conditional else "the model explains the data to within noise"}
