@@ -129,6 +129,9 @@ def test_diagnosis_of_a_recording_with_every_artifact(tmp_path, cli):
     assert any("RR" in w and "upside down" in w for w in warnings), err
     assert any("45.00 Hz" in w for w in warnings) and any("fitted again at the delay's speed" in w
                                                           for w in warnings), err
+    # the rig's onsets confirm the refit's speed (its footprints are alike front and rear)
+    assert any("fitted again at the delay's speed (the impact onsets give" in w for w in warnings), err
+    assert not any("does not confirm" in w for w in warnings), err
     doc = json.loads(out)
     assert doc["effects"] == []
     assert doc["analysis_window"]["conditioning"]["flipped"] == ["RR"]
@@ -287,3 +290,19 @@ def test_a_single_engine_line_without_orders_is_removed_for_identify_and_modelle
     for tire in diag.channels:
         assert diag.final.params[f"k_{tire}"] == pytest.approx(truth[tire]["k"], rel=0.03), tire
         assert diag.final.params[f"c_{tire}"] == pytest.approx(truth[tire]["c"], rel=0.10), tire
+
+
+def test_a_refit_speed_the_impact_onsets_do_not_confirm_is_said_so():
+    """The refit's warning gives the onsets' speed, and says the recording does not confirm the refit where
+    the two differ by more than ONSETS_CONFIRM (a misfitting model moves its delay)."""
+    from identification.diagnose.joint_select import ONSETS_CONFIRM
+    from identification.diagnose.run import _refit_sentence
+
+    base = {"sidecar_m_s": 1.50, "from_delay_m_s": 1.32}          # the delay's speed 12 % under the sidecar's
+    far = _refit_sentence({**base, "from_onsets_m_s": 1.53})
+    assert "fitted again at the delay's speed" in far and "does not confirm" in far
+    assert "5.51 km/h (-13.7 % from the delay's)" in far
+    near = _refit_sentence({**base, "from_onsets_m_s": 1.32 * (1 + 0.9 * ONSETS_CONFIRM)})
+    assert "does not confirm" not in near and "(the impact onsets give" in near
+    assert "does not confirm" in _refit_sentence({**base, "from_onsets_m_s": 1.32 * (1 + 1.1 * ONSETS_CONFIRM)})
+    assert "no side has both impact onsets" in _refit_sentence({**base, "from_onsets_m_s": None})

@@ -47,6 +47,24 @@ def test_staggered_rigid_tractor_names_pitch_and_roll_and_recovers_every_tire(st
     assert "roll_coupling" in doc["evidence"] and "shows in" in doc["evidence"]["roll_coupling"]
 
 
+def test_the_json_names_a_selection_run_again_from_another_start(staggered):
+    import dataclasses
+    import json
+
+    _, diag = staggered
+    residual = max(t["residual_to_noise"] for t in (v for v in diag.unexplained.values() if v)) \
+        if any(diag.unexplained.values()) else 0.0
+    # the rig's own model leaves the noise: the selection never had to run again
+    assert residual < 10 and "selection_starts" not in diag.to_json()
+    again = {"residual_to_noise_before": 12.5, "kept": True, "residual_to_noise_after": 3.1}
+    doc = dataclasses.replace(diag, extra={**diag.extra, "rescue": again,
+                                           "scaled_start": {"skipped": "its start is where the selection "
+                                                                       "already ended"}}).to_json()
+    assert doc["selection_starts"]["rescue"] == again
+    assert "skipped" in doc["selection_starts"]["scaled_start"]
+    json.dumps(doc, allow_nan=False)
+
+
 def test_never_a_false_all_clear_without_the_true_effect(staggered):
     """Without the body among the candidates, the corners cannot explain a rigid tractor: say so, per channel."""
     run, _ = staggered

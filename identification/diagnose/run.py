@@ -51,6 +51,25 @@ NO_ACQUISITION = ("the sidecar declares no acquisition chain (anti-alias filter,
                   "declare it under \"acquisition\" (docs/guide/recordings.md)")
 
 
+def _refit_sentence(refit: dict) -> str:
+    """The warning of a refit at the fitted delay's speed, with the impact onsets' speed where they confirm it
+    or not (:data:`~identification.diagnose.joint_select.ONSETS_CONFIRM`)."""
+    from .joint_select import ONSETS_CONFIRM
+
+    delay, sidecar, onsets = refit["from_delay_m_s"], refit["sidecar_m_s"], refit.get("from_onsets_m_s")
+    text = (f"the fitted front/rear delay gives {delay * 3.6:.3g} km/h, the sidecar {sidecar * 3.6:.3g} km/h "
+            f"({100 * (delay / sidecar - 1):+.1f} %): fitted again at the delay's speed")
+    doubt = ("a model that misfits the impacts can move its delay, and k and c were fitted at that speed (check "
+             "the sidecar's speed)")
+    if onsets is None:
+        return text + f"; no side has both impact onsets to confirm it: {doubt}"
+    off = delay / onsets - 1
+    if abs(off) <= ONSETS_CONFIRM:
+        return text + f" (the impact onsets give {onsets * 3.6:.3g} km/h)"
+    return (text + f"; the impact onsets give {onsets * 3.6:.3g} km/h ({100 * off:+.1f} % from the delay's), so the "
+                   f"recording does not confirm it: {doubt}")
+
+
 def diagnosis_warnings(diag, gain) -> list[str]:
     """What the diagnosis itself has to warn of (one sentence each): a cleat profile its footprint models
     approximate, the sensor signs it settled, a refit at the fitted delay's speed, a baseline whose FMUs
@@ -80,10 +99,7 @@ def diagnosis_warnings(diag, gain) -> list[str]:
         out.append(f"the signs of {'/'.join(signs['open'])} not tested: {signs['skipped']}")
     refit = diag.extra.get("speed_refit")
     if refit:
-        out.append(f"the fitted front/rear delay gives {refit['from_delay_m_s'] * 3.6:.3g} km/h, the sidecar "
-                   f"{refit['sidecar_m_s'] * 3.6:.3g} km/h "
-                   f"({100 * (refit['from_delay_m_s'] / refit['sidecar_m_s'] - 1):+.1f} %): fitted again at the "
-                   f"delay's speed")
+        out.append(_refit_sentence(refit))
     out += [note for note in (gain.note, gain.final_note) if note]
     for check in (diag.extra.get("free_decay") or {}).values():
         if check.get("reason"):

@@ -31,7 +31,6 @@ import numpy as np
 from ..errors import InputError
 from . import Body, Cleat, TractorModel
 from .kernels import run_model
-from .memo import PredictionMemo, parameters_key
 from .sensing import sensed_lowpassed, sensed_lowpassed_reference
 from ..recording.preprocess import DEFAULT_CUTOFF_HZ, broadband_noise, noise_rms, preprocess
 from ..recording import FRONT_TIRES, TIRES, Recording
@@ -55,8 +54,6 @@ _UNITS = {"k": ("N/m", "tire stiffness (tangent at the static load)"), "c": ("N 
           "lug_amplitude": ("m", "road-equivalent amplitude of the periodic excitation"),
           "lug_frequency": ("Hz", "frequency of the periodic excitation"),
           "lug_phase": ("rad", "phase of the periodic excitation")}
-#: The recent predictions of every model (:mod:`~identification.model.memo`): a repeated run returns them.
-PREDICTIONS = PredictionMemo()
 #: Signed parameters (the others are positive and fitted as logarithms).
 SIGNED = ("arrival", "stagger", "lug_amplitude", "lug_phase")
 LEAD_S = 0.05
@@ -309,18 +306,10 @@ class TractorFitModel:
     def predict(self, theta: dict, *, step_s: float | None = None, trajectory=None) -> dict:
         """Low-passed predicted acceleration per channel on the recording's time base, m/s²."""
         pb, rec = self.problem, self.problem.rec
-        key = None
-        if trajectory is None:   # a run made shortly before with the same parameters is not made again
-            params = parameters_key(theta)
-            key = None if params is None else (pb, self.effects, self.ring, self.resolve_edges,
-                                               step_s or self.default_step_s(), params)
-            found = PREDICTIONS.get(key)
-            if found is not None:
-                return found
         traj = trajectory if trajectory is not None else self.simulate(theta, step_s=step_s)
         y = sensed_lowpassed(traj, rec.time_s, rec.sample_rate_hz, rec.acquisition, cutoff_hz=pb.cutoff_hz,
                              tires=len(pb.channels))
-        return PREDICTIONS.put(key, dict(zip(pb.channels, y)))
+        return dict(zip(pb.channels, y))
 
     def predict_reference(self, theta: dict, *, step_s: float | None = None, trajectory=None) -> dict:
         """:meth:`predict` channel by channel with the public functions ``sensed_acceleration`` and ``lowpass``
