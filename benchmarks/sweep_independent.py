@@ -112,6 +112,7 @@ def analyse(job) -> dict:
     # the speeds the diagnosis used and fitted, against the true one (the sidecar's is off by up to 1 %)
     row["speed"] = {key: (speeds[key] / true_m_s - 1 if speeds.get(key) else None)
                     for key in ("sidecar", "from_onsets", "analysed_with", "from_delay")}
+    row["speed"]["refit_confirmed"] = speeds.get("refit_confirmed")
     row["right"] = set(row["effects"]) == set(truth["expected_effects"])
     # the selections run again from other starts, and whether their result was kept
     row["again"] = {k: v.get("kept", False) if "skipped" not in v else "skipped"

@@ -139,6 +139,7 @@ def test_diagnosis_of_a_recording_with_every_artifact(tmp_path, cli):
     assert speed["sidecar"] == pytest.approx(1.05 * run.truth["speed_m_s"])
     assert speed["from_delay"] / run.truth["speed_m_s"] - 1 == pytest.approx(0, abs=0.002)
     assert speed["analysed_with"] / run.truth["speed_m_s"] - 1 == pytest.approx(0, abs=0.002)
+    assert speed["refit_confirmed"] is True
     for tire, t in doc["tires"].items():
         assert t["k"] == pytest.approx(run.truth["tires"][tire]["k"], rel=0.03), tire
         assert t["c"] == pytest.approx(run.truth["tires"][tire]["c"], rel=0.10), tire
@@ -295,7 +296,7 @@ def test_a_single_engine_line_without_orders_is_removed_for_identify_and_modelle
 def test_a_refit_speed_the_impact_onsets_do_not_confirm_is_said_so():
     """The refit's warning gives the onsets' speed, and says the recording does not confirm the refit where
     the two differ by more than ONSETS_CONFIRM (a misfitting model moves its delay)."""
-    from identification.diagnose.joint_select import ONSETS_CONFIRM
+    from identification.diagnose.joint_result import ONSETS_CONFIRM
     from identification.diagnose.run import _refit_sentence
 
     base = {"sidecar_m_s": 1.50, "from_delay_m_s": 1.32}          # the delay's speed 12 % under the sidecar's

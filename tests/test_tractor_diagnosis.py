@@ -43,6 +43,7 @@ def test_staggered_rigid_tractor_names_pitch_and_roll_and_recovers_every_tire(st
     assert diag.final.params["stagger"] == pytest.approx(truth_stagger, abs=2e-3)
     doc = diag.to_json()
     assert doc["body"]["speed_m_s"]["from_delay"] == pytest.approx(7 / 3.6, rel=0.01)
+    assert "refit_confirmed" not in doc["body"]["speed_m_s"]      # the sidecar's speed was right: no refit
     assert doc["body"]["front_axle"] == "rigid"
     assert "roll_coupling" in doc["evidence"] and "shows in" in doc["evidence"]["roll_coupling"]
 

@@ -217,11 +217,6 @@ def diagnose_tractor(rec, *, cutoff_hz: float = 100.0, effects=EFFECTS, progress
 #: Relative difference between the sidecar's speed and the fitted front/rear delay's above which the
 #: diagnosis is fitted again at the delay's speed.
 SPEED_REFIT = 0.02
-#: Relative difference between the refit's speed and the impact onsets' within which the onsets confirm it: the
-#: footprints shift the onsets' delay by up to about 3 % (measured on the independent simulator's tuning seeds:
-#: the onsets' speed 0-4 % above the true one on its corners; the rig's within 1 %).  Beyond it the refit's
-#: speed is reported as unconfirmed (a model that misfits the impacts moves its delay: 12-15 % seen).
-ONSETS_CONFIRM = 0.05
 
 
 def _diagnose_once(rec, cutoff_hz, effects, progress, workers, channels) -> TractorDiagnosis:

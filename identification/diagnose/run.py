@@ -53,8 +53,8 @@ NO_ACQUISITION = ("the sidecar declares no acquisition chain (anti-alias filter,
 
 def _refit_sentence(refit: dict) -> str:
     """The warning of a refit at the fitted delay's speed, with the impact onsets' speed where they confirm it
-    or not (:data:`~identification.diagnose.joint_select.ONSETS_CONFIRM`)."""
-    from .joint_select import ONSETS_CONFIRM
+    or not (:func:`~identification.diagnose.joint_result.refit_confirmed`)."""
+    from .joint_result import refit_confirmed
 
     delay, sidecar, onsets = refit["from_delay_m_s"], refit["sidecar_m_s"], refit.get("from_onsets_m_s")
     text = (f"the fitted front/rear delay gives {delay * 3.6:.3g} km/h, the sidecar {sidecar * 3.6:.3g} km/h "
@@ -63,11 +63,10 @@ def _refit_sentence(refit: dict) -> str:
              "the sidecar's speed)")
     if onsets is None:
         return text + f"; no side has both impact onsets to confirm it: {doubt}"
-    off = delay / onsets - 1
-    if abs(off) <= ONSETS_CONFIRM:
+    if refit_confirmed(refit):
         return text + f" (the impact onsets give {onsets * 3.6:.3g} km/h)"
-    return (text + f"; the impact onsets give {onsets * 3.6:.3g} km/h ({100 * off:+.1f} % from the delay's), so the "
-                   f"recording does not confirm it: {doubt}")
+    return (text + f"; the impact onsets give {onsets * 3.6:.3g} km/h ({100 * (delay / onsets - 1):+.1f} % from the "
+                   f"delay's), so the recording does not confirm it: {doubt}")
 
 
 def diagnosis_warnings(diag, gain) -> list[str]:
