@@ -33,13 +33,14 @@ def test_a_plot_that_cannot_be_written_names_the_plot(command, tmp_path, monkeyp
     def full(files):
         raise OSError(errno.EFBIG, os.strerror(errno.EFBIG))
 
-    monkeypatch.setattr(plots, "atomic_write_bytes", full)
-    monkeypatch.setattr(files_module, "atomic_write_bytes", full)
     folder = tmp_path / "case"
     folder.mkdir()
+    # the inputs first (the first test of a process makes them with the commands, which write files too)
     for name, data in _files("run.csv", "run.json", "diag.json").items():
         (folder / name).parent.mkdir(parents=True, exist_ok=True)
         (folder / name).write_bytes(data)
+    monkeypatch.setattr(plots, "atomic_write_bytes", full)
+    monkeypatch.setattr(files_module, "atomic_write_bytes", full)
     plot = folder / "out" / "p.png"
     argv = {"comfort": ["comfort", folder / "run.csv"],
             "ride": ["ride", folder / "run.csv", f"--body={folder}/diag.json", "--compare=final", "--workers=1",
