@@ -34,6 +34,10 @@ Across kinds, module names and model identifiers must be unique.  Exit status
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import signal
+import subprocess
 import sys
 import tempfile
 import time
@@ -48,7 +52,7 @@ from .reference import read_reference
 from .runners import open_fmpy_slave, run_fmpy_loop, run_libcosim, simulate_fmpy, variable_refs
 from identification._files import temp_prefix
 
-__all__ = ["check_kind", "state_round_trip_problems", "compare", "main"]
+__all__ = ["check_kind", "check_variant", "check_variant_apart", "state_round_trip_problems", "compare", "main"]
 
 
 def compare(label: str, got: dict, ref: dict, names, rtol: float, atol: float, rows=slice(None)) -> list[str]:
@@ -237,6 +241,59 @@ def _body_rest_problems(kind: str, fmu: Path, log, fmi_version: int) -> list[str
     return []
 
 
+def check_variant(kind: str, backend: str, fmi_version: int, workdir: Path, log=print) -> list[str]:
+    """Every check of one kind, backend and FMI version, in this process; the problems, each with its label."""
+    label = f"{kind} ({backend}, FMI {fmi_version})"
+    try:
+        problems = check_kind(kind, workdir, log=log, backend=backend, fmi_version=fmi_version)
+        if backend == "native":
+            problems += native_problems(kind, workdir, log=log, fmi_version=fmi_version)
+    except Exception as exc:  # a failing kind must not hide the others
+        problems = [f"{type(exc).__name__}: {exc}"]
+    return [f"{label}: {p}" for p in problems]
+
+
+def check_variant_apart(kind: str, backend: str, fmi_version: int, workdir: Path) -> list[str]:
+    """:func:`check_variant` in a child process (``python -P -m build_scripts.check KIND --backend B
+    --fmi-version V --result FILE``), its output relayed.
+
+    Each variant's FMU libraries, fmpy's and libcosim's (its engine, its worker threads; with a pythonfmu FMU,
+    C++ that calls back into the interpreter) are loaded and torn down in a process of their own.  With every
+    variant in one process the check aborted about once in 70-100 runs *after* its last line, in a library's
+    exit handler ("corrupted double-linked list": a 4-byte count at offset 8 of an already freed 128-byte
+    block decremented, a C++ shared count released twice in a teardown).
+
+    The child writes its problems before it exits.  If it then dies of a signal, they stand and a line says
+    so; if it dies before writing them, that is a problem of the variant.
+    """
+    label = f"{kind} ({backend}, FMI {fmi_version})"
+    result = workdir / f"{kind}_{backend}_fmi{fmi_version}.problems.json"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(Path(__file__).resolve().parents[1]),
+                                                                     os.environ.get("PYTHONPATH")]))}
+    proc = subprocess.run([sys.executable, "-P", "-m", "build_scripts.check", kind, "--backend", backend,
+                           "--fmi-version", str(fmi_version), "--result", str(result), "--workdir", str(workdir)],
+                          capture_output=True, text=True, env=env)
+    sys.stdout.write(proc.stdout)
+    sys.stderr.write(proc.stderr)
+    ended = _ending(proc.returncode)
+    if not result.exists():
+        return [f"{label}: its check process ended with {ended} before writing its result"]
+    problems = json.loads(result.read_text(encoding="utf-8"))
+    if proc.returncode and not problems:
+        print(f"{label}: its check process wrote its result (every check passed), then ended with {ended} "
+              "while the libraries it had loaded were torn down")
+    return problems
+
+
+def _ending(returncode: int) -> str:
+    if returncode < 0:
+        try:
+            return f"signal {signal.Signals(-returncode).name}"
+        except ValueError:
+            return f"signal {-returncode}"
+    return f"exit status {returncode}"
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m build_scripts.check", description=__doc__.split("\n\n")[0])
     parser.add_argument("kinds", nargs="*", help="kinds to check (default: all in fmu_src)")
@@ -244,7 +301,16 @@ def main(argv=None) -> int:
                         help="backend(s) to check (default: all)")
     parser.add_argument("--fmi-version", type=int, choices=(2, 3), action="append",
                         help="FMI version(s) to check (default: all the backend builds)")
+    parser.add_argument("--result", type=Path, help=argparse.SUPPRESS)   # a child: one variant, problems to FILE
+    parser.add_argument("--workdir", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.result:
+        problems = check_variant(args.kinds[0], args.backend[0], args.fmi_version[0], args.workdir)
+        part = args.result.with_suffix(".part")
+        part.write_text(json.dumps(problems), encoding="utf-8")
+        part.replace(args.result)
+        sys.stdout.flush()
+        return 1 if problems else 0
     variants = [(b, v) for b, v in VARIANTS if (not args.backend or b in args.backend)
                 and (not args.fmi_version or v in args.fmi_version)]
     kinds = args.kinds or kind_names()
@@ -255,14 +321,8 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix=temp_prefix("check")) as tmp:
         for kind in kinds:
             for backend, version in [(b, v) for b, v in variants if b in load_kind(kind).backends]:
-                label = f"{kind} ({backend}, FMI {version})"
-                try:
-                    failures += [f"{label}: {p}" for p in check_kind(kind, Path(tmp), backend=backend,
-                                                                     fmi_version=version)]
-                    if backend == "native":
-                        failures += [f"{label}: {p}" for p in native_problems(kind, Path(tmp), fmi_version=version)]
-                except Exception as exc:  # a failing kind must not hide the others
-                    failures.append(f"{label}: {type(exc).__name__}: {exc}")
+                sys.stdout.flush()
+                failures += check_variant_apart(kind, backend, version, Path(tmp))
     for problem in failures:
         print(f"check: FAIL {problem}", file=sys.stderr)
     print(f"check: {len(kinds)} FMU kind(s), {'all passed' if not failures else f'{len(failures)} problem(s)'}")

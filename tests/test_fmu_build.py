@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import shlex
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -11,7 +12,7 @@ import pytest
 from fmu_helpers import initial_unknowns, model_description, output_dependencies, packaged_modules, rewrite_fmu
 
 from build_scripts import build_fmu, kind_names, load_kind, resolve_start_values
-from build_scripts.check import main as check_main
+from build_scripts.check import check_variant_apart, main as check_main
 from build_scripts.compliance import compliance_problems
 from build_scripts.kinds import module_name_conflicts, module_source
 from build_scripts.units import SI_UNITS
@@ -199,3 +200,29 @@ def test_check_entry_passes_for_every_kind(capsys):
     assert check_main([]) == 0
     out = capsys.readouterr().out
     assert "all passed" in out and "libcosimpy" in out
+
+
+def _wrapped_python(tmp_path, monkeypatch, when: str) -> None:
+    """The check's children run through a shell wrapper that aborts them (SIGABRT) `when` ("before" or "after")
+    the real interpreter has run the variant's checks."""
+    wrapper = tmp_path / "python"
+    real = shlex.quote(sys.executable)
+    body = 'kill -ABRT $$\n' if when == "before" else f'{real} "$@"\nkill -ABRT $$\n'
+    wrapper.write_text(f"#!/bin/sh\n{body}", encoding="utf-8")
+    wrapper.chmod(0o755)
+    monkeypatch.setattr(sys, "executable", str(wrapper))
+
+
+@pytest.mark.parametrize("when", ["before", "after"])
+def test_a_variant_whose_process_aborts_is_named(tmp_path, monkeypatch, capsys, when):
+    """Each variant is checked in a process of its own: one aborted before writing its result is a problem of
+    that variant; one aborted after writing it keeps its result, and a line says how it ended."""
+    _wrapped_python(tmp_path, monkeypatch, when)
+    problems = check_variant_apart("point_contact", "native", 2, tmp_path)
+    out = capsys.readouterr().out
+    if when == "before":
+        assert problems == ["point_contact (native, FMI 2): its check process ended with signal SIGABRT before "
+                            "writing its result"]
+    else:
+        assert problems == [] and "point_contact (native, FMI 2): OK" in out
+        assert "then ended with signal SIGABRT" in out
