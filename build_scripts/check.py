@@ -35,9 +35,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -49,7 +46,7 @@ from .build import BACKENDS, build_fmu, resolve_start_values
 from .compliance import compliance_problems
 from .kinds import kind_names, load_kind, module_name_conflicts
 from .reference import read_reference
-from .runners import open_fmpy_slave, run_fmpy_loop, run_libcosim, simulate_fmpy, variable_refs
+from .runners import ending, open_fmpy_slave, python_apart, run_fmpy_loop, run_libcosim, simulate_fmpy, variable_refs
 from identification._files import temp_prefix
 
 __all__ = ["check_kind", "check_variant", "check_variant_apart", "state_round_trip_problems", "compare", "main"]
@@ -268,30 +265,17 @@ def check_variant_apart(kind: str, backend: str, fmi_version: int, workdir: Path
     """
     label = f"{kind} ({backend}, FMI {fmi_version})"
     result = workdir / f"{kind}_{backend}_fmi{fmi_version}.problems.json"
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(Path(__file__).resolve().parents[1]),
-                                                                     os.environ.get("PYTHONPATH")]))}
-    proc = subprocess.run([sys.executable, "-P", "-m", "build_scripts.check", kind, "--backend", backend,
-                           "--fmi-version", str(fmi_version), "--result", str(result), "--workdir", str(workdir)],
-                          capture_output=True, text=True, env=env)
+    proc = python_apart(["build_scripts.check", kind, "--backend", backend, "--fmi-version", str(fmi_version),
+                         "--result", str(result), "--workdir", str(workdir)])
     sys.stdout.write(proc.stdout)
     sys.stderr.write(proc.stderr)
-    ended = _ending(proc.returncode)
     if not result.exists():
-        return [f"{label}: its check process ended with {ended} before writing its result"]
+        return [f"{label}: its check process ended with {ending(proc.returncode)} before writing its result"]
     problems = json.loads(result.read_text(encoding="utf-8"))
     if proc.returncode and not problems:
-        print(f"{label}: its check process wrote its result (every check passed), then ended with {ended} "
-              "while the libraries it had loaded were torn down")
+        print(f"{label}: its check process wrote its result (every check passed), then ended with "
+              f"{ending(proc.returncode)} while the libraries it had loaded were torn down")
     return problems
-
-
-def _ending(returncode: int) -> str:
-    if returncode < 0:
-        try:
-            return f"signal {signal.Signals(-returncode).name}"
-        except ValueError:
-            return f"signal {-returncode}"
-    return f"exit status {returncode}"
 
 
 def main(argv=None) -> int:

@@ -8,7 +8,8 @@ Signals are dicts ``{name: 1-D array}`` on a uniform time grid ``t_k = start
   row k ≥ 1 the outputs recorded at t_k after the step from t_{k-1}, during
   which fmpy held the inputs of row k-1 (its co-simulation master applies
   inputs at the start of each communication step).
-* :func:`run_fmpy_loop` and :func:`run_libcosim` — for k = 0..N-1: set the
+* :func:`run_fmpy_loop` and :func:`run_libcosim` (:func:`run_libcosim_apart`: the
+  same in a child process) — for k = 0..N-1: set the
   inputs of row k, step from t_k to t_{k+1}, read the outputs; so their
   row k equals row k+1 of :func:`simulate_fmpy`.
 
@@ -20,11 +21,18 @@ FMU's own start values.
 from __future__ import annotations
 
 import math
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["simulate_fmpy", "run_fmpy_loop", "run_libcosim", "open_fmpy_slave", "set_values", "variable_refs"]
+__all__ = ["simulate_fmpy", "run_fmpy_loop", "run_libcosim", "run_libcosim_apart", "open_fmpy_slave", "set_values",
+           "variable_refs", "python_apart", "ending"]
 
 
 def variable_refs(fmu) -> dict[str, tuple[int, str]]:
@@ -219,3 +227,63 @@ def run_libcosim(fmu, signals: dict, outputs: list[str], *, start_values: dict |
             out[n][k] = bool(v)
     out["time"] = t[1:]
     return out
+
+
+def python_apart(module_args: list[str], **kwargs) -> subprocess.CompletedProcess:
+    """``python -P -m <module_args>`` in a child process that imports this very ``build_scripts`` (its folder
+    first on PYTHONPATH), output captured as text."""
+    path = [str(Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH")]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, path))}
+    return subprocess.run([sys.executable, "-P", "-m", *module_args], capture_output=True, text=True, env=env,
+                          **kwargs)
+
+
+def ending(returncode: int) -> str:
+    """How a child process ended, in words: "signal SIGABRT", "exit status 1"."""
+    if returncode < 0:
+        try:
+            return f"signal {signal.Signals(-returncode).name}"
+        except ValueError:
+            return f"signal {-returncode}"
+    return f"exit status {returncode}"
+
+
+def run_libcosim_apart(fmu, signals: dict, outputs: list[str], *, start_values: dict | None = None,
+                       log=print) -> dict:
+    """:func:`run_libcosim` in a child process, its results returned.
+
+    libcosim's engine, its worker threads and the FMU library it loads (a pythonfmu FMU's C++ calls back into
+    the interpreter) are torn down with the child, not in the caller (see :mod:`build_scripts.check` for the
+    abort this avoids).  The child writes its outputs before it exits; if it then dies, they stand and `log`
+    says how it ended.
+
+    Raises
+    ------
+    RuntimeError
+        If the child ends before writing its outputs (with its last line of error output).
+    """
+    with tempfile.TemporaryDirectory(prefix="libcosim_") as tmp:
+        job, result = Path(tmp) / "job.pkl", Path(tmp) / "out.pkl"
+        job.write_bytes(pickle.dumps((str(Path(fmu).resolve()), {k: np.asarray(v) for k, v in signals.items()},
+                                      list(outputs), start_values)))
+        proc = python_apart(["build_scripts.runners", str(job), str(result)])
+        if not result.exists():
+            last = (proc.stderr.strip().splitlines() or [ending(proc.returncode)])[-1]
+            raise RuntimeError(f"libcosim's process on {Path(fmu).name} ended before its result: {last}")
+        out = pickle.loads(result.read_bytes())
+    if proc.returncode:
+        log(f"{Path(fmu).name}: libcosim's process wrote its result, then ended with {ending(proc.returncode)}")
+    return out
+
+
+def _child(job: str, result: str) -> int:
+    fmu, signals, outputs, start_values = pickle.loads(Path(job).read_bytes())
+    out = run_libcosim(fmu, signals, outputs, start_values=start_values)
+    part = Path(result).with_suffix(".part")
+    part.write_bytes(pickle.dumps(out))
+    part.replace(result)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(_child(*sys.argv[1:]))

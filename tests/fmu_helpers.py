@@ -22,7 +22,7 @@ import pytest
 import build_scripts
 from build_scripts import build_fmu
 from build_scripts.reference import read_reference
-from build_scripts.runners import open_fmpy_slave, run_fmpy_loop, run_libcosim, simulate_fmpy, variable_refs
+from build_scripts.runners import open_fmpy_slave, run_fmpy_loop, run_libcosim_apart, simulate_fmpy, variable_refs
 
 #: Largest RSS growth, in bytes, a leak test accepts over its cycles.
 LEAK_LIMIT = 1024 * 1024
@@ -221,7 +221,7 @@ def assert_libcosim_matches_fmpy(fmu, kind_name, inputs, outputs, start_values=N
     ref = read_reference(kind_name)
     signals = {n: ref[n] for n in ["time", *inputs]}
     fmpy_out = run_fmpy_loop(fmu, signals, outputs, start_values=start_values)
-    cosim_out = run_libcosim(fmu, signals, outputs, start_values=start_values)
+    cosim_out = run_libcosim_apart(fmu, signals, outputs, start_values=start_values)  # (its own process)
     for name in outputs:
         assert np.array_equal(cosim_out[name], fmpy_out[name]), name
         assert np.array_equal(cosim_out[name], ref[name][1:]), name  # = fmpy.simulate_fmu, one row later

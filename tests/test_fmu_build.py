@@ -8,6 +8,7 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import numpy as np
 import pytest
 from fmu_helpers import initial_unknowns, model_description, output_dependencies, packaged_modules, rewrite_fmu
 
@@ -15,6 +16,8 @@ from build_scripts import build_fmu, kind_names, load_kind, resolve_start_values
 from build_scripts.check import check_variant_apart, main as check_main
 from build_scripts.compliance import compliance_problems
 from build_scripts.kinds import module_name_conflicts, module_source
+from build_scripts.reference import read_reference
+from build_scripts.runners import run_fmpy_loop, run_libcosim_apart
 from build_scripts.units import SI_UNITS
 
 EXPECTED_UNITS = {"hub_z": "m", "hub_vz": "m/s", "road_z": "m", "road_vz": "m/s", "stiffness": "N/m",
@@ -226,3 +229,23 @@ def test_a_variant_whose_process_aborts_is_named(tmp_path, monkeypatch, capsys, 
     else:
         assert problems == [] and "point_contact (native, FMI 2): OK" in out
         assert "then ended with signal SIGABRT" in out
+
+
+@pytest.mark.parametrize("when", ["before", "after"])
+def test_libcosim_in_a_process_that_aborts(fmu, tmp_path, monkeypatch, when):
+    """libcosim's run in a child process: aborted after writing its outputs, they stand (the same as fmpy's
+    loop) and the log line says how it ended; aborted before, it raises."""
+    kind = load_kind("point_contact")
+    ref = read_reference("point_contact")
+    signals = {n: ref[n] for n in ["time", *kind.names("input")]}
+    outputs = kind.names("output")
+    expected = run_fmpy_loop(fmu, signals, outputs)
+    _wrapped_python(tmp_path, monkeypatch, when)
+    lines = []
+    if when == "before":
+        with pytest.raises(RuntimeError, match="ended before its result"):
+            run_libcosim_apart(fmu, signals, outputs, log=lines.append)
+        return
+    got = run_libcosim_apart(fmu, signals, outputs, log=lines.append)
+    assert all(np.array_equal(got[n], expected[n]) for n in outputs)
+    assert lines == ["point_contact.fmu: libcosim's process wrote its result, then ended with signal SIGABRT"]
