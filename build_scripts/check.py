@@ -46,7 +46,8 @@ from .build import BACKENDS, build_fmu, resolve_start_values
 from .compliance import compliance_problems
 from .kinds import kind_names, load_kind, module_name_conflicts
 from .reference import read_reference
-from .runners import ending, open_fmpy_slave, python_apart, run_fmpy_loop, run_libcosim, simulate_fmpy, variable_refs
+from .runners import (ending, open_fmpy_slave, publish, python_apart, run_fmpy_loop, run_libcosim, simulate_fmpy,
+                      variable_refs)
 from identification._files import temp_prefix
 
 __all__ = ["check_kind", "check_variant", "check_variant_apart", "state_round_trip_problems", "compare", "main"]
@@ -290,9 +291,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.result:
         problems = check_variant(args.kinds[0], args.backend[0], args.fmi_version[0], args.workdir)
-        part = args.result.with_suffix(".part")
-        part.write_text(json.dumps(problems), encoding="utf-8")
-        part.replace(args.result)
+        publish(args.result, json.dumps(problems).encode("utf-8"))
         sys.stdout.flush()
         return 1 if problems else 0
     variants = [(b, v) for b, v in VARIANTS if (not args.backend or b in args.backend)

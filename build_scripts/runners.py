@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["simulate_fmpy", "run_fmpy_loop", "run_libcosim", "run_libcosim_apart", "open_fmpy_slave", "set_values",
-           "variable_refs", "python_apart", "ending"]
+           "variable_refs", "python_apart", "ending", "publish"]
 
 
 def variable_refs(fmu) -> dict[str, tuple[int, str]]:
@@ -238,6 +238,14 @@ def python_apart(module_args: list[str], **kwargs) -> subprocess.CompletedProces
                           **kwargs)
 
 
+def publish(path, data: bytes) -> None:
+    """Write `data` to `path` whole or not at all (a ``.part`` file renamed): a child's result, which its
+    parent takes as written once the file exists."""
+    part = Path(path).with_suffix(".part")
+    part.write_bytes(data)
+    part.replace(path)
+
+
 def ending(returncode: int) -> str:
     """How a child process ended, in words: "signal SIGABRT", "exit status 1"."""
     if returncode < 0:
@@ -278,10 +286,7 @@ def run_libcosim_apart(fmu, signals: dict, outputs: list[str], *, start_values: 
 
 def _child(job: str, result: str) -> int:
     fmu, signals, outputs, start_values = pickle.loads(Path(job).read_bytes())
-    out = run_libcosim(fmu, signals, outputs, start_values=start_values)
-    part = Path(result).with_suffix(".part")
-    part.write_bytes(pickle.dumps(out))
-    part.replace(result)
+    publish(result, pickle.dumps(run_libcosim(fmu, signals, outputs, start_values=start_values)))
     return 0
 
 
