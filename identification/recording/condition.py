@@ -21,8 +21,10 @@ calls it), in this order:
 3. **A flipped sensor.**  A cleat pushes the hub up: the first excursion of a channel's own impact
    (its first burst; a rear channel's after the front axle's impact, which the body carries to it)
    is positive.  A channel whose first excursion is negative was recorded with the sign reversed; it
-   is corrected and named in a warning.  Where an axle's two channels rise at the same time (within
-   :data:`_COINCIDENT_S`) with opposite signs, the sizes of the two first excursions decide: one less
+   is corrected and named in a warning.  Where an axle's two channels rise, or start, at the same time
+   (within :data:`_COINCIDENT_S`; a pivot's roll carries an impact across a few ms slower than the
+   impact rises, so the far hub's rise lags while its onset does not) with opposite signs, the sizes of
+   the two first excursions decide: one less
    than :data:`_CARRIED_RATIO` of the other was carried across by the body (whose roll gives the far
    hub about a quarter of the impact, opposite in sign) and says nothing of its sensor; two comparable
    ones are two own impacts, so the negative one is flipped, except on the front axle, where a
@@ -89,7 +91,7 @@ _STEADY_FACTOR = 1.5
 _MIN_SNR = 10.0
 #: A rear channel's own impact is searched from this fraction of the sidecar's delay after the front's onset.
 _REAR_SEARCH = 0.85
-#: Impacts of an axle's two channels rising closer than this are one event for the flip test, s.
+#: Impacts of an axle's two channels rising or starting closer than this are one event for the flip test, s.
 _COINCIDENT_S = 0.005
 #: Span of a first excursion, s.
 _EXCURSION_S = 0.03
@@ -394,8 +396,8 @@ def condition(rec: Recording, *, cutoff_hz: float = DEFAULT_CUTOFF_HZ, announce:
     span = int(_EXCURSION_S * fs)
     for left, right in (("FL", "FR"), ("RL", "RR")):
         if left in impacts and right in impacts:
-            (_, s1, r1), (_, s2, r2) = impacts[left], impacts[right]
-            if s1 * s2 < 0 and abs(t[r1] - t[r2]) < _COINCIDENT_S:
+            (o1, s1, r1), (o2, s2, r2) = impacts[left], impacts[right]
+            if s1 * s2 < 0 and min(abs(t[r1] - t[r2]), abs(t[o1] - t[o2])) < _COINCIDENT_S:
                 # one event on both sides: each first excursion's size tells an own impact (comparable on
                 # the two sides) from one the body carried across (a quarter of it, opposite in sign)
                 m = {c: float(np.max(impacts[c][1] * filt[names.index(c)][impacts[c][0]:impacts[c][0] + span]))
