@@ -51,7 +51,7 @@ def fits(csv: Path, ring: bool) -> list[tuple[str, object]]:
     model = TractorFitModel(effects, pb, ring=ring)
     fixed = {f"{q}_{t}": x[name] for t, x in truth["tires"].items() for q, name in (("k", "k"), ("c", "c"))}
     fixed.update(arrival=scenario.t0_s, stagger=scenario.stagger_m / v, delay=scenario.vehicle.wheelbase_m / v)
-    start = dict(STARTS, pitch_index=truth["body"]["pitch_index"], **fixed)
+    start = dict(STARTS, pitch_index=(truth.get("body") or {}).get("pitch_index", 1.0), **fixed)   # corners: no body
     first = fit_tractor(model, {n: start[n] for n in model.names}, fixed={n: fixed[n] for n in model.names
                                                                           if n in fixed}, budget=400)
     return [("k, c, arrivals fixed", first), ("free", fit_tractor(model, first.params, budget=400))], truth
